@@ -1,0 +1,44 @@
+# The two set-up commands: `make demo` and `make test`. Both create .venv when missing and
+# install idempotently (a stamp file records the last install of pyproject.toml).
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+FRONT_STAMP := static/.built
+
+.PHONY: demo test install lint frontend bench clean
+
+$(BIN)/python:
+	$(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+
+# torch first, pinned to the local CPU build, so that nothing later pulls a CUDA build.
+$(STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -q torch==2.13.0
+	$(BIN)/python -m pip install -q -e ".[dev]"
+	touch $(STAMP)
+
+install: $(STAMP)
+
+frontend: $(FRONT_STAMP)
+
+$(FRONT_STAMP): $(wildcard frontend/package.json frontend/src/* frontend/*.html frontend/*.js)
+	@if [ -f frontend/package.json ]; then \
+		cd frontend && npm install --no-audit --no-fund && npm run build && touch ../$(FRONT_STAMP); \
+	else mkdir -p static && touch $(FRONT_STAMP); fi
+
+demo: install frontend
+	$(BIN)/proxima demo
+
+lint: install
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+
+test: install frontend lint
+	$(BIN)/python -m pytest -q
+
+bench: install
+	$(BIN)/python -m bench.run_all
+
+clean:
+	rm -rf $(VENV) static/assets $(FRONT_STAMP)

@@ -1,0 +1,3 @@
+"""Proxima: proximal control of several drones by whole-body gestures."""
+
+__version__ = "0.1.0"

@@ -1,0 +1,141 @@
+"""`create_app`: the console's FastAPI application for one settings object and one bus.
+
+Building the app migrates the database to the newest schema (keeping its rows) and
+makes sure a first supervisor exists; the hub binds to the server's loop at start-up.
+"""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+from fastapi.responses import HTMLResponse
+from fastapi.staticfiles import StaticFiles
+from sqlalchemy import Engine
+
+from proxima import __version__
+from proxima.api.hub import WebSocketHub
+from proxima.api.interfaces import EmergencyStop, ModelPromoter, TrainingRunner
+from proxima.api.live import LiveState
+from proxima.api.recorder import SampleRecorder
+from proxima.api.routers import (
+    auth,
+    commands,
+    config,
+    drones,
+    health,
+    models,
+    samples,
+    streams,
+    training,
+    users,
+    ws,
+)
+from proxima.api.services import Console
+from proxima.events import EventBus
+from proxima.settings import Settings
+from proxima.store import migrations
+from proxima.store.base import make_engine, make_sessionmaker
+from proxima.store.users import ensure_first_supervisor
+
+ROUTERS = (
+    health.router,
+    auth.router,
+    users.router,
+    config.router,
+    streams.router,
+    drones.router,
+    commands.router,
+    samples.router,
+    training.router,
+    models.router,
+    ws.router,
+)
+
+_NOT_BUILT = """<!doctype html><title>Proxima</title>
+<p>The console's frontend is not built. Run <code>make frontend</code>
+(npm install &amp;&amp; npm run build in frontend/), then reload.</p>"""
+
+
+def _announce_one_time_password(user: str, password: str) -> None:
+    print(
+        "\n"
+        "  First start: created supervisor account\n"
+        f"    user:     {user}\n"
+        f"    password: {password}   (one-time: you must change it at first login)\n"
+        "  Set PROXIMA_ADMIN_USER and PROXIMA_ADMIN_PASSWORD to choose them instead.\n",
+        flush=True,
+    )
+
+
+def create_app(
+    settings: Settings,
+    bus: EventBus,
+    *,
+    training: TrainingRunner | None = None,
+    estop: EmergencyStop | None = None,
+    promoter: ModelPromoter | None = None,
+    viz_port: int | None = None,
+    db_engine: Engine | None = None,
+    announce: Callable[[str, str], None] = _announce_one_time_password,
+) -> FastAPI:
+    """The console app. Subsystems that are not running are passed as None and their
+    routes answer 503 with the reason.
+
+    Raises:
+        sqlalchemy.exc.SQLAlchemyError: the database cannot be opened or migrated.
+    """
+    engine = db_engine or make_engine(settings.server.db_path)
+    migrations.upgrade(engine)
+    sessions = make_sessionmaker(engine)
+    admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
+    with sessions() as db:
+        created = ensure_first_supervisor(db, settings.admin_user, admin_password)
+    if created is not None:
+        announce(*created)
+
+    console = Console(
+        settings=settings,
+        bus=bus,
+        db_engine=engine,
+        sessions=sessions,
+        hub=WebSocketHub(bus),
+        live=LiveState(bus),
+        recorder=SampleRecorder(bus, sessions),
+        training=training,
+        estop=estop,
+        promoter=promoter,
+        viz_port=viz_port,
+    )
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        console.hub.start()
+        yield
+        console.hub.stop()
+        console.recorder.join(timeout=1.0)
+
+    # No open /docs: the schema is served to logged-in users at /api/openapi.json.
+    app = FastAPI(
+        title="Proxima console",
+        version=__version__,
+        lifespan=lifespan,
+        openapi_url=None,
+        docs_url=None,
+        redoc_url=None,
+    )
+    app.state.console = console
+    for router in ROUTERS:
+        app.include_router(router, prefix="/api")
+
+    static = settings.static_dir()
+    if (static / "index.html").is_file():
+        app.mount("/", StaticFiles(directory=static, html=True), name="static")
+    else:
+
+        @app.get("/", include_in_schema=False)
+        def not_built() -> HTMLResponse:
+            return HTMLResponse(_NOT_BUILT, status_code=503)
+
+    return app

@@ -1,0 +1,74 @@
+"""The small interfaces the console calls into other subsystems through.
+
+The console only listens to the bus for everything live; actions a supervisor takes go
+through these, implemented by the federated runner, the drone link and the live engine.
+When one is absent the matching routes answer 503 with the reason, never a pretend
+success.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol, runtime_checkable
+
+
+class Unavailable(RuntimeError):
+    """The subsystem behind a route is not running in this process."""
+
+
+@runtime_checkable
+class TrainingRunner(Protocol):
+    """Starts federated runs and reports them. Runs publish per-round metrics on the bus;
+    `get_run` returns what is persisted."""
+
+    def start_run(self, params: dict[str, Any]) -> str:
+        """Start a run with these parameters; returns its id at once (runs in background).
+
+        Raises:
+            ValueError: a bad parameter (named).
+        """
+        ...
+
+    def list_runs(self) -> list[dict[str, Any]]:
+        """Every run, newest first: id, status, params, started/finished, final accuracy."""
+        ...
+
+    def get_run(self, run_id: str) -> dict[str, Any] | None:
+        """One run with its per-round and per-client metrics, or None."""
+        ...
+
+
+@runtime_checkable
+class EmergencyStop(Protocol):
+    """Two-step emergency stop: `request` returns a confirmation id and changes nothing;
+    only `confirm` with that id (before it expires) stops the drone."""
+
+    def request(self, drone: str, user: str) -> dict[str, Any]:
+        """Returns at least `confirmation_id` and `expires_in_s`.
+
+        Raises:
+            KeyError: unknown drone.
+        """
+        ...
+
+    def confirm(self, drone: str, confirmation_id: str, user: str) -> dict[str, Any]:
+        """Stops the drone; returns the outcome (`ok`, `detail`).
+
+        Raises:
+            PermissionError: unknown, expired or already used confirmation id.
+        """
+        ...
+
+
+@runtime_checkable
+class ModelPromoter(Protocol):
+    """Puts a checkpoint into the live engine (an explicit action, never automatic)."""
+
+    def promote(self, checkpoint_path: str) -> dict[str, Any]:
+        """Load the checkpoint into every stream's classifier; returns what was loaded.
+
+        Raises:
+            ValueError: the file is not a usable checkpoint.
+        """
+        ...
+
+    def active_checkpoint(self) -> str | None: ...

@@ -1,0 +1,109 @@
+"""Labelled samples: record from a stream, review, keep or delete, list."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, HTTPException, Query, status
+
+from proxima.api.deps import ConsoleDep, CurrentUser, DbDep, SupervisorUser
+from proxima.api.schemas import RecordingRequest, SampleDetail, SampleOut, SampleReview
+from proxima.store.samples import Sample, SampleStatus, list_samples, review_sample
+from proxima.types import GESTURES
+
+router = APIRouter(prefix="/samples", tags=["samples"])
+
+
+def _out(s: Sample) -> SampleOut:
+    return SampleOut(
+        id=s.id,
+        created_at=s.created_at,
+        stream=s.stream,
+        drone=s.drone,
+        label=s.label,
+        status=s.status,
+        n_frames=s.n_frames,
+        t_start=s.t_start,
+        t_end=s.t_end,
+        created_by=s.created_by,
+        reviewed_by=s.reviewed_by,
+    )
+
+
+@router.get("")
+def get_samples(
+    _: CurrentUser,
+    db: DbDep,
+    drone: str | None = None,
+    stream: str | None = None,
+    status_: Annotated[SampleStatus | None, Query(alias="status")] = None,
+    limit: Annotated[int, Query(ge=1, le=1000)] = 200,
+) -> list[SampleOut]:
+    return [
+        _out(s) for s in list_samples(db, drone=drone, stream=stream, status=status_, limit=limit)
+    ]
+
+
+@router.post("/recordings", status_code=status.HTTP_202_ACCEPTED)
+def start_recording(body: RecordingRequest, user: SupervisorUser, console: ConsoleDep) -> dict:
+    """Count down, then record `frames` poses of the stream as a pending sample; progress
+    arrives on the WebSocket as `recording` events and at GET /recordings/{id}."""
+    try:
+        stream = console.settings.stream(body.stream)
+    except KeyError:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no stream {body.stream!r}") from None
+    if body.label is not None and body.label not in GESTURES:
+        raise HTTPException(
+            status.HTTP_422_UNPROCESSABLE_CONTENT, f"unknown gesture {body.label!r}"
+        )
+    try:
+        rec = console.recorder.start(
+            stream=stream.name,
+            drone=stream.drone,
+            frames=body.frames,
+            countdown_s=body.countdown_s,
+            user=user.username,
+            label=body.label,
+        )
+    except ValueError as exc:
+        raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
+    return rec.to_dict()
+
+
+@router.get("/recordings/{recording_id}")
+def get_recording(recording_id: str, _: CurrentUser, console: ConsoleDep) -> dict:
+    rec = console.recorder.get(recording_id)
+    if rec is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no recording {recording_id!r}")
+    return rec.to_dict()
+
+
+def _sample(db: DbDep, sample_id: int) -> Sample:
+    s = db.get(Sample, sample_id)
+    if s is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no sample {sample_id}")
+    return s
+
+
+@router.get("/{sample_id}")
+def get_sample(sample_id: int, _: CurrentUser, db: DbDep) -> SampleDetail:
+    """A sample with its landmarks, for the skeleton playback."""
+    s = _sample(db, sample_id)
+    arr = s.arrays()
+    return SampleDetail(
+        **_out(s).model_dump(),
+        xyz=arr.xyz.round(4).tolist(),
+        visibility=arr.visibility.round(3).tolist(),
+        times=arr.times.tolist(),
+    )
+
+
+@router.patch("/{sample_id}")
+def review(sample_id: int, body: SampleReview, user: SupervisorUser, db: DbDep) -> SampleOut:
+    """Keep (with a gesture label) or delete a sample."""
+    s = _sample(db, sample_id)
+    try:
+        review_sample(db, s, status=body.status, label=body.label, by=user.username)
+    except ValueError as exc:
+        raise HTTPException(status.HTTP_422_UNPROCESSABLE_CONTENT, str(exc)) from None
+    return _out(s)

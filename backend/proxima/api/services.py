@@ -1,0 +1,30 @@
+"""Everything a request handler may need, built once per app by `create_app`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sqlalchemy import Engine
+from sqlalchemy.orm import sessionmaker
+
+from proxima.api.hub import WebSocketHub
+from proxima.api.interfaces import EmergencyStop, ModelPromoter, TrainingRunner
+from proxima.api.live import LiveState
+from proxima.api.recorder import SampleRecorder
+from proxima.events import EventBus
+from proxima.settings import Settings
+
+
+@dataclass
+class Console:
+    settings: Settings
+    bus: EventBus
+    db_engine: Engine
+    sessions: sessionmaker
+    hub: WebSocketHub
+    live: LiveState
+    recorder: SampleRecorder
+    training: TrainingRunner | None = None
+    estop: EmergencyStop | None = None
+    promoter: ModelPromoter | None = None
+    viz_port: int | None = None  # the viser server's port when one runs

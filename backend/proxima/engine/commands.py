@@ -1,0 +1,182 @@
+"""`proxima recognize` (run one stream, write every event as JSON lines) and
+`proxima stitch` (build replay streams from dataset clips, with a ground-truth script)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+
+def register(app: typer.Typer) -> None:
+    """Add the engine's commands to the `proxima` app."""
+    app.command("recognize")(recognize)
+    app.command("stitch")(stitch)
+
+
+def recognize(
+    source: Annotated[
+        str, typer.Option(help="webcam:N, file:PATH, rtsp://HOST/PATH or replay:PATH[@FPS]")
+    ],
+    events: Annotated[Path, typer.Option(help="write every event here, one JSON per line")],
+    checkpoint: Annotated[
+        Path | None, typer.Option(help="gesture model (default: models/gesture-default.pt)")
+    ] = None,
+    name: Annotated[str, typer.Option(help="stream name in the events")] = "main",
+    drone: Annotated[str, typer.Option(help="drone the commands go to (default: NAME)")] = "",
+    realtime: Annotated[
+        bool, typer.Option(help="pace file/replay sources to their timestamps")
+    ] = False,
+    stride: Annotated[int | None, typer.Option(help="classify every N frames")] = None,
+    threshold: Annotated[float | None, typer.Option(help="filtered confidence needed")] = None,
+    debounce_s: Annotated[float | None, typer.Option(help="least seconds between commands")] = None,
+    idle_disarm_s: Annotated[float | None, typer.Option(help="disarm after idle seconds")] = None,
+    pose_every: Annotated[int, typer.Option(help="write a pose event every N frames")] = 1,
+    pose_model: Annotated[Path | None, typer.Option(help="MediaPipe pose model")] = None,
+) -> None:
+    """Recognise gestures in one stream until it ends (or Ctrl-C) and write every event
+    (pose, gesture, action, arming, handover, command, stream) as JSON lines, with `t` in
+    stream seconds. Commands are what would be sent to the drone; nothing is sent."""
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from proxima.control import ControlSettings
+    from proxima.engine.config import EngineSettings, StreamSpec
+    from proxima.engine.jsonl import JsonlWriter
+    from proxima.engine.runner import Engine
+    from proxima.events import CommandEvent, EventBus
+
+    console = Console(stderr=True)
+    overrides = {"threshold": threshold, "debounce_s": debounce_s, "idle_disarm_s": idle_disarm_s}
+    try:
+        control = ControlSettings(**{k: v for k, v in overrides.items() if v is not None})
+        settings = EngineSettings(
+            pose_every=pose_every,
+            pose_model=pose_model,
+            **({"stride": stride} if stride is not None else {}),
+        )
+        spec = StreamSpec(name=name, uri=source, drone=drone)
+    except ValueError as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(2) from None
+    bus = EventBus()
+    commands: list[CommandEvent] = []
+    bus.add_listener(lambda e: commands.append(e) if isinstance(e, CommandEvent) else None)
+    engine = Engine([spec], bus, control=control, settings=settings, realtime=realtime,
+                    checkpoint=checkpoint)  # fmt: skip
+    try:
+        writer = JsonlWriter(events, bus)
+    except OSError as exc:
+        console.print(f"[red]error:[/red] cannot write {events}: {exc}")
+        raise typer.Exit(2) from None
+    stats = engine.stats[name]
+    interrupted = False
+    with writer:
+        try:
+            engine.start()
+        except (FileNotFoundError, ValueError) as exc:
+            console.print(f"[red]error:[/red] {exc}")
+            raise typer.Exit(2) from None
+        columns = (
+            TextColumn("{task.description}"),
+            BarColumn(),
+            TextColumn("{task.fields[info]}"),
+            TimeElapsedColumn(),
+        )
+        with Progress(*columns, console=console) as progress:
+            task = progress.add_task(f"recognize {name}", total=None, info="")
+
+            def show(total: int | None) -> None:
+                info = f"t={stats.last_t:.1f}s commands={len(commands)}"
+                progress.update(task, total=total, completed=stats.frames, info=info)
+
+            try:
+                while not engine.wait(0.2):
+                    show(stats.total_frames)
+            except KeyboardInterrupt:
+                interrupted = True
+                engine.stop()
+            show(stats.total_frames or stats.frames)
+    console.print(
+        f"{stats.frames} frames, {stats.classifications} classifications, "
+        f"{writer.written} events -> {events}"
+    )
+    for c in commands:
+        console.print(f"  t={c.t:8.2f}s  {c.command:<15} -> {c.drone} (seen by {c.stream or '-'})")
+    if stats.error:
+        console.print(f"[red]error:[/red] {stats.error}")
+        raise typer.Exit(1)
+    if interrupted:
+        raise typer.Exit(130)
+
+
+def stitch(
+    out: Annotated[Path, typer.Option(help="CSV to write (one per view: OUT.<view>.csv)")],
+    script: Annotated[
+        str, typer.Option(help="GESTURE:SECONDS,... e.g. have_command:5,move_to_left:6")
+    ] = "",
+    random_segments: Annotated[
+        int, typer.Option("--random", help="instead of --script: N random gestures")
+    ] = 0,
+    min_s: Annotated[float, typer.Option(help="shortest random segment (s)")] = 3.0,
+    max_s: Annotated[float, typer.Option(help="longest random segment (s)")] = 6.0,
+    view: Annotated[list[str] | None, typer.Option(help="camera view f, l or r (repeat)")] = None,
+    part: Annotated[
+        str, typer.Option(help="test (temporal split's last 30%), train or all")
+    ] = "test",
+    transition_s: Annotated[float, typer.Option(help="seconds between two gestures")] = 0.5,
+    fps: Annotated[float, typer.Option(help="frame rate of the stream")] = 30.0,
+    blank: Annotated[
+        list[str] | None,
+        typer.Option(help="VIEW:KIND:START:END, KIND feet or drop (repeat), e.g. f:feet:20:35"),
+    ] = None,
+    seed: Annotated[int, typer.Option(help="random seed (segment offsets, random script)")] = 0,
+    data: Annotated[str | None, typer.Option(help="LASER data folder")] = None,
+) -> None:
+    """Stitch LASER clips into a replay stream (landmark CSV) performing a gesture script,
+    with smooth transitions, and write its ground truth beside it (OUT.truth.json)."""
+    import numpy as np
+    from rich.console import Console
+
+    from proxima.engine.stitch import (
+        StitchError,
+        parse_blank,
+        parse_plan,
+        random_plan,
+        stitch_views,
+    )
+    from proxima.gesture.clip import DataError
+    from proxima.gesture.data_source import resolve_dataset
+    from proxima.gesture.laser import load_laser_dir
+
+    console = Console(stderr=True)
+    views = view or ["f"]
+    try:
+        if bool(script) == bool(random_segments):
+            raise StitchError("give exactly one of --script and --random")
+        plan = (
+            parse_plan(script)
+            if script
+            else random_plan(np.random.default_rng(seed), random_segments, min_s, max_s)
+        )
+        blanks: dict[str, list] = {}
+        for spec in blank or []:
+            v, sep, rest = spec.partition(":")
+            kind, sep2, times = rest.partition(":")
+            if not (sep and sep2) or v not in views:
+                raise StitchError(f"blank {spec!r}: expected VIEW:KIND:START:END, VIEW in {views}")
+            blanks.setdefault(v, []).append(parse_blank(times, kind))
+        with console.status("loading clips"):
+            clips = load_laser_dir(resolve_dataset(data))
+        streams = stitch_views(clips, plan, views, part, transition_s, fps, blanks, seed)
+    except (StitchError, DataError) as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(2) from None
+    for v, stream in streams.items():
+        path = out if len(views) == 1 else out.with_name(f"{out.stem}.{v}{out.suffix}")
+        truth = stream.write(path)
+        console.print(
+            f"{path}: view {v}, {len(stream.segments)} gestures, {stream.duration_s:.1f} s, "
+            f"{len(stream.frames)} frames; truth {truth}"
+        )

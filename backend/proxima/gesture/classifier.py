@@ -1,0 +1,111 @@
+"""A trained gesture model in one file, and the inference wrapper the live engine uses.
+
+The checkpoint (torch.save of plain types, loadable with weights_only=True) holds the
+weights, the model's name and config, the label list, the window length, the feature
+pipeline's name and fitted state, and free-form metadata (command, data hash, metrics).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from proxima.gesture.features import Pipeline, make_pipeline
+from proxima.gesture.geometry import to_metric
+from proxima.gesture.models import build_model, model_config
+from proxima.gesture.train import predict_proba
+from proxima.types import GESTURES
+
+FORMAT = "proxima-gesture/1"
+DEFAULT_NAME = "gesture-default.pt"
+MODELS_DIR = Path(__file__).resolve().parents[3] / "models"
+
+
+def default_checkpoint() -> Path:
+    """The shipped default model, `models/gesture-default.pt` in the repository."""
+    return MODELS_DIR / DEFAULT_NAME
+
+
+def save_checkpoint(
+    path: str | Path,
+    model: nn.Module,
+    model_name: str,
+    pipeline: Pipeline,
+    window: int,
+    metadata: dict[str, Any],
+) -> Path:
+    """Write a self-contained checkpoint (atomically: a temp file, then a rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    blob = {
+        "format": FORMAT,
+        "model": model_name,
+        "config": model_config(model),
+        "state_dict": {k: v.detach().cpu().half() if v.is_floating_point() else v
+                       for k, v in model.state_dict().items()},
+        "labels": list(GESTURES),
+        "window": window,
+        "pipeline": {"name": pipeline.name, "state": pipeline.state()},
+        "metadata": {"created": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"), **metadata},
+    }  # fmt: skip
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    torch.save(blob, tmp)
+    tmp.replace(path)
+    return path
+
+
+class GestureClassifier:
+    """Classifies 60-frame windows of MediaPipe landmarks into the 13 gestures."""
+
+    def __init__(self, model: nn.Module, model_name: str, pipeline: Pipeline, window: int,
+                 labels: tuple[str, ...], metadata: dict[str, Any]) -> None:  # fmt: skip
+        self.model = model.eval()
+        self.model_name = model_name
+        self.pipeline = pipeline
+        self.window = window
+        self.labels = labels
+        self.metadata = metadata
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> GestureClassifier:
+        """Load a checkpoint (default: the shipped model).
+
+        Raises:
+            FileNotFoundError: no such file.
+            ValueError: the file is not a Proxima gesture checkpoint.
+        """
+        path = Path(path) if path else default_checkpoint()
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: no such checkpoint")
+        try:
+            blob = torch.load(path, map_location="cpu", weights_only=True)
+        except Exception as exc:
+            raise ValueError(f"{path}: not a readable checkpoint ({exc})") from exc
+        if not isinstance(blob, dict) or blob.get("format") != FORMAT:
+            raise ValueError(f"{path}: not a Proxima gesture checkpoint (format {FORMAT})")
+        model = build_model(blob["model"], **blob["config"])
+        model.load_state_dict({k: v.float() if v.is_floating_point() else v
+                               for k, v in blob["state_dict"].items()})  # fmt: skip
+        pipeline = make_pipeline(blob["pipeline"]["name"], blob["pipeline"]["state"])
+        return cls(model, blob["model"], pipeline, int(blob["window"]), tuple(blob["labels"]),
+                   blob.get("metadata", {}))  # fmt: skip
+
+    def features(self, xyz: np.ndarray, aspect: float | np.ndarray = 16 / 9,
+                 has_z: bool = True) -> np.ndarray:  # fmt: skip
+        """Model input for windows xyz (N, W, 33, 3) in normalised image coordinates."""
+        hz = np.full(len(xyz), has_z)
+        return self.pipeline.transform(to_metric(xyz, np.broadcast_to(aspect, (len(xyz),))), hz)
+
+    def predict(self, xyz: np.ndarray, visibility: np.ndarray | None = None,
+                aspect: float | np.ndarray = 16 / 9) -> np.ndarray:  # fmt: skip
+        """Softmax probabilities (N, 13) for windows xyz (N, W, 33, 3) (normalised image
+        coordinates, as MediaPipe gives them; `aspect` = image width / height)."""
+        xyz = np.asarray(xyz, np.float32)
+        if xyz.ndim != 4 or xyz.shape[1:] != (self.window, 33, 3):
+            raise ValueError(f"expected windows (N, {self.window}, 33, 3), got {xyz.shape}")
+        return predict_proba(self.model, self.features(xyz, aspect))

@@ -1,0 +1,136 @@
+"""`proxima train`, `proxima evaluate`, `proxima protocols` and `proxima data fetch`."""
+
+from __future__ import annotations
+
+import json
+import shlex
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+DataOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--data",
+        help="Data folder (LASER CSVs or UAV-Gesture), or the name laser / uav-gesture; "
+        "repeat to combine. Default: $PROXIMA_DATA, ../shared, the cache, or a download.",
+    ),
+]
+SplitOpt = Annotated[
+    str,
+    typer.Option(help="temporal | cross-view:f|l|r | all | uav-gesture:1|2|3"),
+]
+
+
+def _fail(exc: Exception) -> None:
+    typer.secho(f"error: {exc}", fg="red", err=True)
+    raise typer.Exit(2)
+
+
+def train(
+    out: Annotated[Path, typer.Option(help="Where to write the checkpoint (.pt).")],
+    data: DataOpt = None,
+    model: Annotated[str, typer.Option(help="tcn (default) or paper-lstm.")] = "tcn",
+    split: SplitOpt = "temporal",
+    pipeline: Annotated[str | None, typer.Option(help="paper or body (default: the model's).")] = None,
+    epochs: int = 60,
+    patience: int = 12,
+    stride: Annotated[int, typer.Option(help="Frames between training windows.")] = 3,
+    max_gap: Annotated[int, typer.Option(help="Longest gap (missing frames) a window may span.")] = 5,
+    seed: int = 0,
+    threads: Annotated[int, typer.Option(help="Torch threads.")] = 2,
+    yaw: Annotated[float, typer.Option(help="Extra yaw augmentation, degrees.")] = 30.0,
+) -> None:
+    """Train a gesture model on a split's training part and save one self-contained file."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from proxima.gesture.clip import DataError
+    from proxima.gesture.train import TrainConfig
+    from proxima.gesture.workflow import train_model
+
+    cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
+                      seed=seed, threads=threads, yaw_deg=yaw)  # fmt: skip
+    command = "proxima " + shlex.join(sys.argv[1:])
+    with Progress(
+        TextColumn("[bold]train[/]"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+        TextColumn("{task.description}"), TimeElapsedColumn(),
+    ) as progress:  # fmt: skip
+        task = progress.add_task("loading data", total=epochs)
+
+        def on_start(n_fit: int, n_val: int, skipped: int) -> None:
+            progress.console.print(
+                f"{n_fit} training windows, {n_val} validation windows, "
+                f"{skipped} skipped (would span a gap of more than {max_gap} frames)"
+            )
+
+        def on_epoch(log) -> None:  # type: ignore[no-untyped-def]
+            progress.update(task, completed=log.epoch, description=(
+                f"loss {log.train_loss:.3f} val {log.val_loss:.3f} acc {log.val_accuracy:.3f}"
+            ))  # fmt: skip
+
+        try:
+            result = train_model(data, model, split, out, cfg, pipeline, command, on_epoch, on_start)
+        except (DataError, ValueError) as exc:
+            _fail(exc)
+    best = min(result.history, key=lambda h: h.val_loss)
+    typer.echo(
+        f"saved {result.checkpoint} ({result.checkpoint.stat().st_size / 1024:.0f} KiB): "
+        f"{len(result.history)} epochs, best val loss {best.val_loss:.3f} "
+        f"(acc {best.val_accuracy:.3f}) at epoch {best.epoch}, {result.seconds:.0f} s"
+    )
+
+
+def evaluate(
+    checkpoint: Annotated[Path, typer.Option(help="Checkpoint from `proxima train`.")],
+    json_out: Annotated[Path, typer.Option("--json", help="Where to write the metrics JSON.")],
+    data: DataOpt = None,
+    split: SplitOpt = "temporal",
+    stride: Annotated[int, typer.Option(help="Frames between test windows.")] = 3,
+) -> None:
+    """Score a checkpoint on a split's test part: a metrics JSON and a confusion PNG."""
+    from proxima.gesture.clip import DataError
+    from proxima.gesture.evaluate import plot_confusion
+    from proxima.gesture.workflow import evaluate_checkpoint
+
+    try:
+        result = evaluate_checkpoint(checkpoint, data, split, stride)
+    except (DataError, ValueError, FileNotFoundError) as exc:
+        _fail(exc)
+    json_out.parent.mkdir(parents=True, exist_ok=True)
+    json_out.write_text(json.dumps(result, indent=1))
+    png = plot_confusion(
+        result["confusion"], json_out.with_suffix(".png"),
+        f"{checkpoint.name} on {split}: accuracy {result['accuracy']:.3f}",
+    )  # fmt: skip
+    typer.echo(
+        f"{split}: accuracy {result['accuracy']:.3f}, macro F1 {result['macro_f1']:.3f}, "
+        f"clip accuracy {result['clip_accuracy']:.3f} ({result['windows']} windows, "
+        f"{result['clips']} clips) -> {json_out}, {png}"
+    )
+
+
+def fetch(
+    name: Annotated[str, typer.Argument(help="laser or uav-gesture")] = "laser",
+    dest: Annotated[Path | None, typer.Option(help="Folder (default: the user cache).")] = None,
+) -> None:
+    """Download a data set from its pinned upstream commit, verified by SHA-256."""
+    from proxima.gesture.clip import DataError
+    from proxima.gesture.data_source import DATASETS, download_dataset
+
+    if name not in DATASETS:
+        _fail(ValueError(f"unknown data set {name!r}; choose from {sorted(DATASETS)}"))
+    try:
+        path = download_dataset(name, dest)
+    except DataError as exc:
+        _fail(exc)
+    typer.echo(f"{name}: {path}")
+
+
+def register(app: typer.Typer) -> None:
+    app.command()(train)
+    app.command()(evaluate)
+    data_app = typer.Typer(help="Data sets: fetch them for offline use.", no_args_is_help=True)
+    data_app.command()(fetch)
+    app.add_typer(data_app, name="data")

@@ -1,0 +1,54 @@
+"""Load one or more data folders (`--data` given once or more) into clips."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from proxima.gesture.clip import Clip, DataError
+from proxima.gesture.data_source import resolve_dataset, sha256
+from proxima.gesture.laser import load_laser_dir
+from proxima.gesture.uavgesture import is_uavgesture_dir, load_uavgesture_dir
+
+
+@dataclass
+class LoadedData:
+    clips: list[Clip]
+    folders: list[Path]
+    uav_dir: Path | None  # the UAV-Gesture folder, if one was given (for its splits)
+
+    def fingerprint(self) -> str:
+        """SHA-256 over the SHA-256s of every data file, for the model card."""
+        import hashlib
+
+        h = hashlib.sha256()
+        for folder in self.folders:
+            for f in sorted(folder.rglob("*")):
+                if f.is_file() and f.suffix in (".csv", ".mat", ".txt"):
+                    h.update(f"{f.relative_to(folder)}:{sha256(f)}\n".encode())
+        return h.hexdigest()
+
+
+def load_data(specs: Sequence[str | Path] | None = None) -> LoadedData:
+    """Resolve and load every `--data` folder (default: the LASER set).
+
+    Raises:
+        DataError: a folder that is neither a LASER nor a UAV-Gesture folder, or bad data.
+    """
+    clips: list[Clip] = []
+    folders: list[Path] = []
+    uav_dir = None
+    for spec in specs or [None]:
+        folder = resolve_dataset(spec)
+        folders.append(folder)
+        if is_uavgesture_dir(folder):
+            uav_dir = folder
+            clips += load_uavgesture_dir(folder)
+        elif any(folder.glob("*.MP4.csv")):
+            clips += load_laser_dir(folder)
+        else:
+            raise DataError(
+                f"{folder}: neither a LASER folder (*.MP4.csv) nor UAV-Gesture (joint_positions/)"
+            )
+    return LoadedData(clips, folders, uav_dir)

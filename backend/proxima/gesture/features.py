@@ -1,0 +1,100 @@
+"""Feature pipelines: metric landmarks (N, W, 33, 3) -> model input (N, W, F).
+
+- `paper`: the paper's input, all 33 x 3 coordinates with MinMax scaling fitted on the
+  training windows only.
+- `body` (default): view-robust and scale-free, so it needs no fitted statistics (which
+  also keeps federated clients from scaling with statistics only they have). Per window:
+  centred on the hips, scaled by the torso length, turned about the vertical axis to
+  face the camera (from the shoulder and hip lines, using MediaPipe's z), then the 17
+  joints of the skeleton both data sets share, as 2D positions plus their velocities.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from proxima.gesture.geometry import facing_yaw, hip_centre, torso_length
+from proxima.gesture.skeleton import COMMON
+
+
+class PaperPipeline:
+    name = "paper"
+
+    def __init__(self, lo: np.ndarray | None = None, hi: np.ndarray | None = None) -> None:
+        self.lo, self.hi = lo, hi
+
+    @property
+    def num_features(self) -> int:
+        return 99
+
+    def fit(self, metric: np.ndarray) -> PaperPipeline:
+        flat = metric.reshape(-1, 99)
+        self.lo, self.hi = flat.min(axis=0), flat.max(axis=0)
+        return self
+
+    def transform(self, metric: np.ndarray, has_z: np.ndarray | None = None) -> np.ndarray:
+        if self.lo is None or self.hi is None:
+            raise RuntimeError("PaperPipeline.transform before fit")
+        flat = metric.reshape(*metric.shape[:-2], 99)
+        return ((flat - self.lo) / np.maximum(self.hi - self.lo, 1e-6)).astype(np.float32)
+
+    def state(self) -> dict[str, Any]:
+        return {"lo": np.asarray(self.lo).tolist(), "hi": np.asarray(self.hi).tolist()}
+
+    @classmethod
+    def from_state(cls, state: dict[str, Any]) -> PaperPipeline:
+        return cls(np.asarray(state["lo"], np.float32), np.asarray(state["hi"], np.float32))
+
+
+class BodyPipeline:
+    name = "body"
+    joints = COMMON
+
+    @property
+    def num_features(self) -> int:
+        return len(self.joints) * 4
+
+    def fit(self, metric: np.ndarray) -> BodyPipeline:
+        return self  # scale-free: nothing to fit
+
+    def canonical(self, metric: np.ndarray, has_z: np.ndarray | None = None) -> np.ndarray:
+        """(N, W, 33, 3) -> (N, W, 33, 3): hip-centred, torso-scaled, facing the camera.
+        Windows without depth (`has_z` False, e.g. UAV-Gesture) are not turned."""
+        x = metric - hip_centre(metric)
+        x = x / torso_length(x)
+        yaw = facing_yaw(x)  # (N,)
+        if has_z is not None:
+            yaw = np.where(has_z, yaw, 0.0)
+        c, s = np.cos(yaw)[:, None, None], np.sin(yaw)[:, None, None]
+        out = x.copy()
+        out[..., 0] = c * x[..., 0] + s * x[..., 2]
+        out[..., 2] = -s * x[..., 0] + c * x[..., 2]
+        return out
+
+    def transform(self, metric: np.ndarray, has_z: np.ndarray | None = None) -> np.ndarray:
+        pos = self.canonical(metric, has_z)[:, :, list(self.joints), :2]  # (N, W, J, 2)
+        vel = np.diff(pos, axis=1, prepend=pos[:, :1])
+        n, w = pos.shape[:2]
+        return np.concatenate([pos.reshape(n, w, -1), 10 * vel.reshape(n, w, -1)], -1).astype(
+            np.float32
+        )
+
+    def state(self) -> dict[str, Any]:
+        return {}
+
+    @classmethod
+    def from_state(cls, state: dict[str, Any]) -> BodyPipeline:
+        return cls()
+
+
+PIPELINES = {"paper": PaperPipeline, "body": BodyPipeline}
+Pipeline = PaperPipeline | BodyPipeline
+
+
+def make_pipeline(name: str, state: dict[str, Any] | None = None) -> Pipeline:
+    if name not in PIPELINES:
+        raise ValueError(f"unknown feature pipeline {name!r}; choose from {sorted(PIPELINES)}")
+    cls = PIPELINES[name]
+    return cls.from_state(state) if state is not None else cls()

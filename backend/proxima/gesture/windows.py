@@ -1,0 +1,197 @@
+"""Evaluation splits and 60-frame windows.
+
+A split decides, per clip, which rows train and which test. Windows are then cut inside
+each part, never across it: a random split of overlapping windows from one clip puts
+near-identical windows on both sides and scores 0.99-1.00 for any model, so it is not
+offered here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from proxima.gesture.clip import Clip, DataError
+from proxima.types import GESTURES
+
+WINDOW = 60
+TEMPORAL_TRAIN_FRACTION = 0.7
+
+
+@dataclass
+class Windows:
+    """A batch of windows. xyz (N, W, 33, 3) normalised; vis (N, W, 33); labels (N,);
+    clip (N,) index into `clip_names`; aspect (N,) and has_z (N,) per window."""
+
+    xyz: np.ndarray
+    vis: np.ndarray
+    labels: np.ndarray
+    clip: np.ndarray
+    aspect: np.ndarray
+    has_z: np.ndarray
+    clip_names: list[str] = field(default_factory=list)
+    skipped: int = 0  # windows not cut because they would span a long gap
+
+    def __len__(self) -> int:
+        return len(self.labels)
+
+    def subset(self, idx: np.ndarray) -> Windows:
+        return Windows(
+            self.xyz[idx],
+            self.vis[idx],
+            self.labels[idx],
+            self.clip[idx],
+            self.aspect[idx],
+            self.has_z[idx],
+            self.clip_names,
+            0,
+        )
+
+
+def window_starts(frames: np.ndarray, window: int, stride: int, max_gap: int) -> tuple[list, int]:
+    """Start rows of the windows of one clip part, and how many were skipped because
+    they would bridge a gap of more than `max_gap` missing frames."""
+    n = len(frames)
+    if n < window:
+        return [], 0
+    missing = np.diff(frames) - 1  # frames lost between row i and i+1
+    bad = np.r_[0, np.cumsum(missing > max_gap)]  # count of long gaps up to each row
+    starts, skipped = [], 0
+    for s in range(0, n - window + 1, stride):
+        if bad[s + window - 1] - bad[s] > 0:
+            skipped += 1
+        else:
+            starts.append(s)
+    return starts, skipped
+
+
+def make_windows(
+    parts: Sequence[Clip],
+    window: int = WINDOW,
+    stride: int = 5,
+    max_gap: int = 5,
+    clip_names: list[str] | None = None,
+) -> Windows:
+    """Cut windows from clip parts (each part's rows are contiguous in its clip)."""
+    names = clip_names if clip_names is not None else []
+    xyz, vis, labels, clip_ix, aspect, has_z = [], [], [], [], [], []
+    skipped = 0
+    for part in parts:
+        if part.name not in names:
+            names.append(part.name)
+        ci = names.index(part.name)
+        starts, sk = window_starts(part.frames, window, stride, max_gap)
+        skipped += sk
+        for s in starts:
+            xyz.append(part.xyz[s : s + window])
+            vis.append(part.visibility[s : s + window])
+        n = len(starts)
+        labels += [GESTURES.index(part.gesture)] * n
+        clip_ix += [ci] * n
+        aspect += [part.aspect] * n
+        has_z += [part.has_z] * n
+    if not xyz:
+        empty = np.zeros((0, window, 33), np.float32)
+        return Windows(
+            np.zeros((0, window, 33, 3), np.float32),
+            empty,
+            np.zeros(0, np.int64),
+            np.zeros(0, np.int64),
+            np.zeros(0, np.float32),
+            np.zeros(0, bool),
+            names,
+            skipped,
+        )
+    return Windows(
+        np.stack(xyz).astype(np.float32),
+        np.stack(vis).astype(np.float32),
+        np.asarray(labels, np.int64),
+        np.asarray(clip_ix, np.int64),
+        np.asarray(aspect, np.float32),
+        np.asarray(has_z, bool),
+        names,
+        skipped,
+    )
+
+
+@dataclass
+class SplitParts:
+    """Clip parts for training and testing. `test` is empty for `--split all`."""
+
+    name: str
+    train: list[Clip]
+    test: list[Clip]
+
+
+def temporal_parts(clip: Clip, window: int) -> tuple[Clip, Clip]:
+    """First 70% of rows minus one window (the gap) to train, last 30% to test."""
+    cut = int(round(len(clip) * TEMPORAL_TRAIN_FRACTION))
+    return clip.slice(0, max(cut - window, 0)), clip.slice(cut, len(clip))
+
+
+def split_clips(
+    clips: Sequence[Clip], split: str, window: int = WINDOW, uav_dir: Path | None = None
+) -> SplitParts:
+    """Apply a named split: `temporal`, `cross-view:f|l|r`, `all`, `uav-gesture:1|2|3`.
+
+    Raises:
+        DataError: unknown split, or one that leaves no training or no test data.
+    """
+    kind, _, arg = split.partition(":")
+    train: list[Clip] = []
+    test: list[Clip] = []
+    if kind == "temporal":
+        for c in clips:
+            a, b = temporal_parts(c, window)
+            train.append(a)
+            test.append(b)
+    elif kind == "all":
+        train = list(clips)
+    elif kind == "cross-view":
+        if arg not in ("f", "l", "r"):
+            raise DataError(f"split {split!r}: the view must be f, l or r")
+        # LASER clips of the held-out view test; everything else (other views, and any
+        # UAV-Gesture clips, which are other people) trains.
+        for c in clips:
+            (test if c.source == "laser" and c.view == arg else train).append(c)
+    elif kind == "uav-gesture":
+        from proxima.gesture.uavgesture import load_split
+
+        if uav_dir is None:
+            raise DataError(f"split {split!r} needs UAV-Gesture data (--data uav-gesture)")
+        try:
+            number = int(arg)
+        except ValueError:
+            raise DataError(f"split {split!r}: the split number must be 1, 2 or 3") from None
+        tr_names, te_names = load_split(uav_dir, number)
+        for c in clips:
+            if c.source != "uav-gesture" or c.name in tr_names:
+                train.append(c)
+            elif c.name in te_names:
+                test.append(c)
+    else:
+        raise DataError(
+            f"unknown split {split!r}: use temporal, cross-view:f|l|r, all or uav-gesture:1|2|3"
+        )
+    if not train:
+        raise DataError(f"split {split!r} leaves no training data")
+    if kind != "all" and not test:
+        raise DataError(f"split {split!r} leaves no test data for the given --data")
+    return SplitParts(split, train, test)
+
+
+def validation_parts(train: Sequence[Clip], window: int, fraction: float = 0.15) -> tuple:
+    """Hold out the last `fraction` of each training part (after a one-window gap) for
+    early stopping, so validation windows never overlap training windows."""
+    fit, val = [], []
+    for c in train:
+        cut = int(round(len(c) * (1 - fraction)))
+        if cut - window < window or len(c) - cut < window:
+            fit.append(c)  # too short to split: all of it trains
+            continue
+        fit.append(c.slice(0, cut - window))
+        val.append(c.slice(cut, len(c)))
+    return fit, val

@@ -1,0 +1,99 @@
+"""End-to-end train and evaluate, as the CLI runs them: data -> split -> windows ->
+pipeline -> model -> checkpoint; checkpoint -> test windows -> metrics."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from proxima.gesture.classifier import GestureClassifier, save_checkpoint
+from proxima.gesture.datasets import LoadedData, load_data
+from proxima.gesture.evaluate import metrics
+from proxima.gesture.features import make_pipeline
+from proxima.gesture.geometry import to_metric
+from proxima.gesture.models import DEFAULT_PIPELINE, build_model
+from proxima.gesture.train import EpochLog, TrainConfig, fit, predict_proba
+from proxima.gesture.windows import WINDOW, Windows, make_windows, split_clips, validation_parts
+
+
+@dataclass
+class TrainResult:
+    checkpoint: Path
+    history: list[EpochLog]
+    train_windows: int
+    val_windows: int
+    skipped_windows: int
+    seconds: float
+
+
+def split_windows(
+    data: LoadedData, split: str, stride: int, max_gap: int, test_stride: int | None = None
+) -> tuple[Windows, Windows, Windows]:
+    """(fit, validation, test) windows for a split; validation is the tail of each
+    training part, test is empty for `all`."""
+    parts = split_clips(data.clips, split, WINDOW, data.uav_dir)
+    fit_parts, val_parts = validation_parts(parts.train, WINDOW)
+    names: list[str] = []
+    fit_w = make_windows(fit_parts, WINDOW, stride, max_gap, names)
+    val_w = make_windows(val_parts, WINDOW, stride, max_gap, names)
+    test_w = make_windows(parts.test, WINDOW, test_stride or stride, max_gap, names)
+    return fit_w, val_w, test_w
+
+
+def train_model(
+    data_specs: Sequence[str] | None,
+    model_name: str,
+    split: str,
+    out: str | Path,
+    cfg: TrainConfig,
+    pipeline_name: str | None = None,
+    command: str = "",
+    on_epoch: Callable[[EpochLog], None] | None = None,
+    on_start: Callable[[int, int, int], None] | None = None,
+) -> TrainResult:
+    """Train a model on a split's training part and save a self-contained checkpoint."""
+    t0 = time.perf_counter()
+    data = load_data(data_specs)
+    fit_w, val_w, _ = split_windows(data, split, cfg.stride, cfg.max_gap)
+    if on_start:
+        on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
+    pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
+    pipeline.fit(to_metric(fit_w.xyz, fit_w.aspect))
+    model = build_model(model_name, num_features=pipeline.num_features)
+    history = fit(model, pipeline, fit_w, val_w, cfg, on_epoch)
+    meta = {
+        "command": command,
+        "split": split,
+        "data": [str(f) for f in data.folders],
+        "data_sha256": data.fingerprint(),
+        "train_config": cfg.to_dict(),
+        "epochs_run": len(history),
+        "train_windows": len(fit_w),
+        "val_windows": len(val_w),
+    }
+    path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta)
+    return TrainResult(path, history, len(fit_w), len(val_w),
+                       fit_w.skipped + val_w.skipped, time.perf_counter() - t0)  # fmt: skip
+
+
+def evaluate_checkpoint(
+    checkpoint: str | Path | None,
+    data_specs: Sequence[str] | None,
+    split: str,
+    stride: int = 3,
+    max_gap: int = 5,
+) -> dict[str, Any]:
+    """Metrics of a checkpoint on a split's test windows (see evaluate.metrics)."""
+    clf = GestureClassifier.load(checkpoint)
+    data = load_data(data_specs)
+    parts = split_clips(data.clips, split, clf.window, data.uav_dir)
+    test = parts.test if parts.test else parts.train  # `all`: the training data itself
+    w = make_windows(test, clf.window, stride, max_gap)
+    x = clf.pipeline.transform(to_metric(w.xyz, w.aspect), w.has_z)
+    result = metrics(w.labels, predict_proba(clf.model, x), w.clip)
+    result.update(split=split, checkpoint=str(checkpoint), skipped_windows=w.skipped,
+                  model=clf.model_name)  # fmt: skip
+    return result

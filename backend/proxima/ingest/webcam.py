@@ -1,0 +1,56 @@
+"""`webcam:N`: a local camera (V4L2 device N) read by its own thread, newest frame only.
+
+The device is probed when the source is made, so a missing camera is a clear error at
+once; later failures (unplugged) show as `reconnecting` like any live source.
+"""
+
+from __future__ import annotations
+
+import cv2
+
+from proxima.ingest.base import SourceError, StateListener
+from proxima.ingest.live import LiveSource, ReconnectPolicy
+
+
+class WebcamSource(LiveSource):
+    """Frames of camera `index`; `t` is seconds since the first frame (wall clock).
+
+    Raises:
+        SourceError: (from the constructor) the camera cannot be opened.
+    """
+
+    def __init__(
+        self,
+        uri: str,
+        index: int,
+        *,
+        policy: ReconnectPolicy | None = None,
+        stall_after_s: float = 1.0,
+        max_age_s: float = 1.0,
+        on_state: StateListener | None = None,
+    ) -> None:
+        super().__init__(
+            uri,
+            policy=policy,
+            stall_after_s=stall_after_s,
+            max_age_s=max_age_s,
+            on_state=on_state,
+        )
+        self.index = index
+        self._probed: cv2.VideoCapture | None = self._open_capture()
+
+    def _open_capture(self) -> cv2.VideoCapture:
+        probed, self._probed = getattr(self, "_probed", None), None
+        if probed is not None:
+            return probed
+        cap = cv2.VideoCapture(self.index)
+        if not cap.isOpened():
+            cap.release()
+            raise SourceError(f"{self.uri}: cannot open camera {self.index} (no such device?)")
+        return cap
+
+    def close(self) -> None:
+        probed, self._probed = self._probed, None
+        if probed is not None:
+            probed.release()
+        super().close()

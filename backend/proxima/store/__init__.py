@@ -1,0 +1,1 @@
+"""SQLite storage (SQLAlchemy): samples and labels, command log, training runs, users."""

@@ -1,0 +1,213 @@
+// Live page: one tile per stream (frame + skeleton, raw gesture, filtered action, armed,
+// stream and link state), the driving stream highlighted, drones and the command log
+// beside.
+import { isSupervisor } from "../api.js";
+import { openEstop } from "../estop.js";
+import { clear, drawSkeleton } from "../skeleton.js";
+import { drivingDrone, state, subscribe } from "../store.js";
+
+const W = 384;
+const H = 216;
+let root = null;
+let raf = 0;
+let unsub = null;
+let seenVersion = -1;
+const tiles = new Map(); // stream -> {el, canvas, ctx, fields}
+
+const pct = (x) => (typeof x === "number" ? `${Math.round(x * 100)}%` : "");
+const fmtTime = (wall) => (wall ? new Date(wall * 1000).toLocaleTimeString() : "");
+
+function el(tag, attrs = {}, ...children) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === "class") e.className = v;
+    else if (k === "text") e.textContent = v;
+    else e.setAttribute(k, v);
+  }
+  e.append(...children);
+  return e;
+}
+
+function makeTile(s) {
+  const canvas = el("canvas", { width: W, height: H, class: "frame" });
+  const f = {};
+  const field = (name, label) => {
+    f[name] = el("span", { class: `value ${name}` });
+    return el("div", { class: `field f-${name}` }, el("span", { class: "label", text: label }), f[name]);
+  };
+  f.title = el("span", { class: "title", text: s.name });
+  f.badges = el("span", { class: "badges" });
+  const tile = el(
+    "article",
+    { class: "tile", "data-stream": s.name },
+    el("header", {}, f.title, f.badges),
+    canvas,
+    el(
+      "div",
+      { class: "fields" },
+      field("gesture", "gesture"),
+      field("action", "action"),
+      field("armed", "control"),
+      field("state", "stream"),
+      field("link", "link"),
+      field("visible", "operator"),
+    ),
+  );
+  const ctx = canvas.getContext("2d");
+  clear(ctx, W, H);
+  return { el: tile, canvas, ctx, f };
+}
+
+function renderTileText(s, t) {
+  const driving = state.drivingStream === s.name;
+  t.el.classList.toggle("driving", driving);
+  const drone = state.drones.get(s.drone);
+  const link = drone?.state?.link || "";
+  t.f.badges.replaceChildren(
+    el("span", { class: "badge", text: s.drone ? `→ ${s.drone}` : "" }),
+    el("span", { class: "badge", text: s.priority === 0 ? "main" : `#${s.priority}` }),
+    el("span", { class: "badge", text: s.kind }),
+    ...(driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
+  );
+  const lv = s.live;
+  t.f.gesture.textContent = lv.gesture ? `${lv.gesture} ${pct(lv.gesture_confidence)}` : "—";
+  t.f.action.textContent = lv.action ? `${lv.action} ${pct(lv.action_confidence)}` : "—";
+  t.f.armed.textContent = lv.armed ? "ARMED" : "disarmed";
+  t.f.armed.className = `value armed ${lv.armed ? "on" : "off"}`;
+  t.f.state.textContent = lv.state || "—";
+  t.f.state.className = `value state s-${lv.state || "none"}`;
+  t.f.link.textContent = link || "—";
+  t.f.link.className = `value link l-${link || "none"}`;
+  t.f.visible.textContent = lv.visible === undefined ? "—" : lv.visible ? "in view" : "lost";
+}
+
+function drawTile(s, t) {
+  const ctx = t.ctx;
+  if (s.thumb) ctx.drawImage(s.thumb, 0, 0, W, H);
+  else clear(ctx, W, H);
+  if (s.pose) drawSkeleton(ctx, s.pose.xyz, s.pose.visibility, W, H);
+  t.canvas.dataset.poseCount = String(s.poseCount);
+  t.canvas.dataset.poseT = s.pose ? String(s.pose.t) : "";
+}
+
+function renderSide() {
+  const drones = root.querySelector(".drones");
+  const driving = drivingDrone();
+  drones.replaceChildren(
+    ...[...state.drones.values()].map((d) => {
+      const st = d.state || {};
+      const pos = st.position ? st.position.map((v) => v.toFixed(1)).join(", ") : "—";
+      const card = el(
+        "div",
+        { class: `drone ${d.name === driving ? "driving" : ""}`, "data-drone": d.name },
+        el("b", { text: d.name }),
+        el("span", { class: `badge l-${st.link || "none"}`, text: st.link || "no telemetry" }),
+        ...(d.name === driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
+      );
+      if (isSupervisor()) {
+        const b = el("button", { class: "estop small", text: "stop" });
+        b.addEventListener("click", () => openEstop(d.name));
+        card.append(b);
+      }
+      const battery = st.battery_pct != null ? `${Math.round(st.battery_pct)}%` : "—";
+      card.append(
+        el("div", { text: [st.mode, st.armed ? "motors armed" : "motors disarmed", st.landed].filter(Boolean).join(" · ") }),
+        el("div", { text: `NED ${pos} m · battery ${battery}` }),
+      );
+      return card;
+    }),
+  );
+  const log = root.querySelector(".command-log tbody");
+  log.replaceChildren(
+    ...state.commands.slice(0, 60).map((c) => {
+      const r = c.result;
+      const outcome = r ? [r.status, r.ack, r.outcome, r.reason].filter(Boolean).join(" · ") : "";
+      return el(
+        "tr",
+        { class: r && r.status === "refused" ? "refused" : "" },
+        el("td", { text: typeof c.t === "number" ? c.t.toFixed(1) : "" }),
+        el("td", { text: c.drone || "" }),
+        el("td", { text: c.command || "" }),
+        el("td", { text: c.stream || "" }),
+        el("td", { text: outcome }),
+      );
+    }),
+  );
+  const alarms = root.querySelector(".alarms");
+  alarms.replaceChildren(
+    ...state.alarms
+      .filter((a) => a.active)
+      .slice(0, 5)
+      .map((a) => el("div", { class: "alarm", text: `${a.drone}: ${a.message}` })),
+  );
+}
+
+function syncTiles() {
+  const grid = root.querySelector(".tiles");
+  const streams = [...state.streams.values()].sort((a, b) => a.priority - b.priority);
+  for (const s of streams) {
+    if (!tiles.has(s.name)) {
+      const t = makeTile(s);
+      tiles.set(s.name, t);
+      grid.append(t.el);
+    }
+  }
+  if (!streams.length) grid.replaceChildren(el("p", { class: "empty", text: "No streams yet." }));
+  else grid.querySelector(".empty")?.remove();
+}
+
+function frame() {
+  if (!root) return;
+  if (seenVersion !== state.version) {
+    seenVersion = state.version;
+    syncTiles();
+    for (const s of state.streams.values()) renderTileText(s, tiles.get(s.name));
+    renderSide();
+  }
+  for (const s of state.streams.values()) {
+    const t = tiles.get(s.name);
+    if (!t) {
+      seenVersion = -1;
+      continue;
+    }
+    if (s.dirty) {
+      s.dirty = false;
+      drawTile(s, t);
+      t.f.visible.textContent = s.live.visible ? "in view" : "lost";
+    }
+  }
+  raf = requestAnimationFrame(frame);
+}
+
+export function mount(container) {
+  root = container;
+  root.append(
+    el("section", { class: "tiles" }),
+    el(
+      "aside",
+      { class: "side" },
+      el("h2", { text: "Drones" }),
+      el("div", { class: "alarms" }),
+      el("div", { class: "drones" }),
+      el("h2", { text: "Command log" }),
+      el(
+        "table",
+        { class: "command-log" },
+        el("thead", {}, el("tr", {}, ...["t (s)", "drone", "command", "seen by", "outcome"].map((h) => el("th", { text: h })))),
+        el("tbody"),
+      ),
+    ),
+  );
+  tiles.clear();
+  seenVersion = -1;
+  for (const s of state.streams.values()) s.dirty = true;
+  unsub = subscribe(() => {});
+  raf = requestAnimationFrame(frame);
+}
+
+export function unmount() {
+  cancelAnimationFrame(raf);
+  if (unsub) unsub();
+  root = null;
+  tiles.clear();
+}
