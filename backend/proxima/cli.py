@@ -25,6 +25,9 @@ def _register_all() -> None:
     from proxima.drone import commands as drone_commands
 
     drone_commands.register(app)
+    from proxima.api import commands as api_commands
+
+    api_commands.register(app)
 
 
 _register_all()

@@ -97,7 +97,7 @@ class GeofenceSettings(_Section):
 
     radius_m: float = Field(30.0, gt=0)
     min_alt_m: float = Field(1.0, ge=0)
-    max_alt_m: float = Field(15.0, gt=0)
+    max_alt_m: float = Field(20.0, gt=0)
 
     @model_validator(mode="after")
     def _check_alt(self) -> GeofenceSettings:
@@ -117,24 +117,24 @@ class DroneSettings(_Section):
 
 
 class RecognitionSettings(_Section):
-    """The decision stage: filter, threshold, debounce, arming, handover."""
+    """The decision stage: filter, threshold, debounce, arming, handover. A field left
+    unset (None) keeps the live engine's tuned default (see docs/recognition.md)."""
 
     checkpoint: Path | None = None
-    stride: int = Field(5, ge=1)
-    filter_window: int = Field(3, ge=1, description="moving average over N recognitions")
-    threshold: float = Field(0.6, ge=0, le=1)
-    debounce_s: float = Field(2.0, ge=0)
-    arming_timeout_s: float = Field(30.0, gt=0)
-    handover_hold_s: float = Field(1.0, ge=0)
-    operator_lost_hover_s: float = Field(2.0, ge=0)
+    stride: int | None = Field(None, ge=1, description="classify every N frames")
+    filter_window: int | None = Field(None, ge=1, description="moving average over N")
+    threshold: float | None = Field(None, ge=0, le=1)
+    debounce_s: float | None = Field(None, ge=0)
+    arming_timeout_s: float | None = Field(None, gt=0, description="idle time to disarm")
+    handover_hold_s: float | None = Field(None, ge=0)
+    operator_lost_hover_s: float = Field(5.0, gt=0, description="hover after this long")
 
 
 class SafetySettings(_Section):
     """Checks before any command reaches a vehicle."""
 
     geofence: GeofenceSettings = GeofenceSettings()
-    max_step_m: float = Field(2.0, gt=0)
-    step_m: float = Field(1.0, gt=0)
+    max_step_m: float = Field(3.0, gt=0)
     min_command_interval_s: float = Field(1.0, ge=0)
 
 

@@ -57,7 +57,8 @@ export function setupEstop() {
         id: res.confirmation_id,
         expires: performance.now() + 1000 * (res.expires_in_s ?? 15),
       };
-      $("#estop-question").textContent = `Really stop ${drone}? ${res.message || ""}`;
+      const what = res.kind === "land" ? "It will land where it is." : res.kind ? `Action: ${res.kind}.` : "";
+      $("#estop-question").textContent = `Really stop ${drone}? ${what}`;
       $("#estop-step1").hidden = true;
       $("#estop-step2").hidden = false;
       const tick = () => {

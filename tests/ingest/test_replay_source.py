@@ -200,3 +200,15 @@ def test_missing_empty_and_binary_csv(tmp_path: Path) -> None:
     binary.write_bytes(bytes(range(256)) * 4)
     with pytest.raises(LandmarkCsvError, match=str(binary)):
         open_source(f"replay:{binary}")
+
+
+def test_extra_columns_are_ignored(tmp_path: Path) -> None:
+    lines = FRONT.read_text().splitlines()
+    labelled = tmp_path / "labelled.csv"
+    labelled.write_text(
+        "\n".join([lines[0] + ",gesture"] + [line + ",have_command" for line in lines[1:]])
+    )
+    a = read_landmark_csv(FRONT)
+    b = read_landmark_csv(labelled)
+    np.testing.assert_array_equal(a.frames, b.frames)
+    np.testing.assert_array_equal(a.xyz, b.xyz)

@@ -69,6 +69,27 @@ def _announce_one_time_password(user: str, password: str) -> None:
     )
 
 
+def open_database(
+    settings: Settings,
+    engine: Engine | None = None,
+    announce: Callable[[str, str], None] = _announce_one_time_password,
+) -> Engine:
+    """The console's database, migrated to the newest schema (rows kept), with a first
+    supervisor (from the environment, or a printed one-time password). Idempotent.
+
+    Raises:
+        sqlalchemy.exc.SQLAlchemyError: the database cannot be opened or migrated.
+    """
+    engine = engine or make_engine(settings.server.db_path)
+    migrations.upgrade(engine)
+    admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
+    with make_sessionmaker(engine)() as db:
+        created = ensure_first_supervisor(db, settings.admin_user, admin_password)
+    if created is not None:
+        announce(*created)
+    return engine
+
+
 def create_app(
     settings: Settings,
     bus: EventBus,
@@ -86,14 +107,8 @@ def create_app(
     Raises:
         sqlalchemy.exc.SQLAlchemyError: the database cannot be opened or migrated.
     """
-    engine = db_engine or make_engine(settings.server.db_path)
-    migrations.upgrade(engine)
+    engine = open_database(settings, db_engine, announce)
     sessions = make_sessionmaker(engine)
-    admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
-    with sessions() as db:
-        created = ensure_first_supervisor(db, settings.admin_user, admin_password)
-    if created is not None:
-        announce(*created)
 
     console = Console(
         settings=settings,

@@ -59,7 +59,9 @@ class ReplayPoseFeed:
 
     def start(self) -> ReplayPoseFeed:
         for name, uri in self.streams.items():
-            t = threading.Thread(target=self._run, args=(name, uri), daemon=True, name=f"feed-{name}")
+            t = threading.Thread(
+                target=self._run, args=(name, uri), daemon=True, name=f"feed-{name}"
+            )
             self._threads.append(t)
             t.start()
         return self

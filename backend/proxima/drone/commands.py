@@ -5,12 +5,29 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-DRONE_ACTIONS = ("status", "guided", "mode", "arm", "disarm", "takeoff", "goto", "hold",
-                 "speed", "land", "gesture")  # fmt: skip
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from proxima.drone.link import CommandResult, Telemetry
+    from proxima.drone.mavlink_link import MavlinkLink
+
+DRONE_ACTIONS = (
+    "status",
+    "guided",
+    "mode",
+    "arm",
+    "disarm",
+    "takeoff",
+    "goto",
+    "hold",
+    "speed",
+    "land",
+    "gesture",
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -19,12 +36,20 @@ def register(app: typer.Typer) -> None:
 
 
 def sim_drone(
-    port: Annotated[int, typer.Option(help="UDP port on 127.0.0.1 where the ground station "
-                                           "listens (it connects with udpin:127.0.0.1:PORT)")] = 14550,  # fmt: skip
+    port: Annotated[
+        int,
+        typer.Option(
+            help="UDP port on 127.0.0.1 where the ground station "
+            "listens (it connects with udpin:127.0.0.1:PORT)"
+        ),
+    ] = 14550,
     sysid: Annotated[int, typer.Option(help="MAVLink system id, 1..255")] = 1,
-    autopilot: Annotated[str, typer.Option(help="ardupilot (ArduCopter-like) or px4")] = "ardupilot",
-    out_port: Annotated[list[int] | None, typer.Option(help="another ground-station port "
-                                                            "(repeatable)")] = None,  # fmt: skip
+    autopilot: Annotated[
+        str, typer.Option(help="ardupilot (ArduCopter-like) or px4")
+    ] = "ardupilot",
+    out_port: Annotated[
+        list[int] | None, typer.Option(help="another ground-station port (repeatable)")
+    ] = None,
     rate: Annotated[float, typer.Option(help="telemetry rate in Hz")] = 10.0,
     max_speed: Annotated[float, typer.Option(help="horizontal speed limit, m/s")] = 5.0,
     max_accel: Annotated[float, typer.Option(help="acceleration limit, m/s^2")] = 2.5,
@@ -48,8 +73,13 @@ def sim_drone(
         raise typer.BadParameter(f"--sysid must be 1..255, got {sysid}")
     if autopilot not in ("ardupilot", "px4"):
         raise typer.BadParameter(f"--autopilot must be ardupilot or px4, got {autopilot!r}")
-    for name, value in (("--rate", rate), ("--max-speed", max_speed), ("--max-accel", max_accel),
-                        ("--max-climb", max_climb), ("--land-speed", land_speed)):  # fmt: skip
+    for name, value in (
+        ("--rate", rate),
+        ("--max-speed", max_speed),
+        ("--max-accel", max_accel),
+        ("--max-climb", max_climb),
+        ("--land-speed", land_speed),
+    ):
         if not value > 0:
             raise typer.BadParameter(f"{name} must be positive, got {value}")
     if not 0.0 <= loss < 1.0:
@@ -57,17 +87,31 @@ def sim_drone(
     try:
         lat, lon, alt = (float(x) for x in home.split(","))
     except ValueError:
-        raise typer.BadParameter(f"--home must be LAT,LON,ALT (three numbers), got {home!r}")
-    cfg = SimConfig(port=port, sysid=sysid, autopilot=autopilot, out_ports=tuple(out_port or ()),
-                    rate_hz=rate, max_speed=max_speed, max_accel=max_accel, max_climb=max_climb,
-                    land_speed=land_speed, home=(lat, lon, alt), battery_pct=battery,
-                    loss=loss, seed=seed)  # fmt: skip
+        msg = f"--home must be LAT,LON,ALT (three numbers), got {home!r}"
+        raise typer.BadParameter(msg) from None
+    cfg = SimConfig(
+        port=port,
+        sysid=sysid,
+        autopilot=autopilot,
+        out_ports=tuple(out_port or ()),
+        rate_hz=rate,
+        max_speed=max_speed,
+        max_accel=max_accel,
+        max_climb=max_climb,
+        land_speed=land_speed,
+        home=(lat, lon, alt),
+        battery_pct=battery,
+        loss=loss,
+        seed=seed,
+    )
     vehicle = SimVehicle(cfg)
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
-    typer.echo(f"sim-drone sysid {sysid} ({autopilot}) sending to 127.0.0.1:{port}; "
-               f"connect with udpin:127.0.0.1:{port}. Ctrl-C stops.")  # fmt: skip
+    typer.echo(
+        f"sim-drone sysid {sysid} ({autopilot}) sending to 127.0.0.1:{port}; "
+        f"connect with udpin:127.0.0.1:{port}. Ctrl-C stops."
+    )
     vehicle.run(stop)
     typer.echo(f"sim-drone sysid {sysid} stopped")
 
@@ -93,7 +137,7 @@ def drone_cmd(
     """
     from rich.console import Console
 
-    from proxima.drone.link import CommandResult, LinkError
+    from proxima.drone.link import LinkError
     from proxima.drone.mavlink_link import MavlinkLink
 
     console = Console(stderr=True)
@@ -110,7 +154,7 @@ def drone_cmd(
         if action == "status":
             pass
         elif action == "gesture":
-            out = _gesture(link, name, values, mapping, db, wait, console)
+            out = _gesture(link, name, values[0], mapping, db, wait, console)
         else:
             result: CommandResult = _direct(link, action, values, numbers)
             out = result.to_dict()
@@ -146,7 +190,9 @@ def _numbers(action: str, values: list[str]) -> list[float]:
         raise typer.BadParameter(f"{action} needs numbers, got {values}") from None
 
 
-def _direct(link, action: str, values: list[str], numbers: list[float]):  # type: ignore[no-untyped-def]
+def _direct(
+    link: MavlinkLink, action: str, values: list[str], numbers: list[float]
+) -> CommandResult:
     if action == "guided":
         return link.enter_guided()
     if action == "mode":
@@ -158,7 +204,8 @@ def _direct(link, action: str, values: list[str], numbers: list[float]):  # type
     if action == "takeoff":
         return link.takeoff(numbers[0])
     if action == "goto":
-        return link.goto_local(*numbers)
+        north, east, down = numbers
+        return link.goto_local(north, east, down)
     if action == "hold":
         return link.hold()
     if action == "speed":
@@ -166,55 +213,66 @@ def _direct(link, action: str, values: list[str], numbers: list[float]):  # type
     return link.land()
 
 
-def _wait_outcome(link, action: str, numbers: list[float], console) -> str:  # type: ignore[no-untyped-def]
+def _wait_outcome(link: MavlinkLink, action: str, numbers: list[float], console: Console) -> str:
+    """Follow the vehicle with a progress bar until the action's outcome is known."""
+    import time
+
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from proxima.types import LinkState
+
+    tel = link.telemetry()
+    height = (tel.altitude if tel else None) or 0.0
     if action == "land":
-        start = (link.telemetry().altitude or 0.0) or 1.0
-
-        def check(t):  # type: ignore[no-untyped-def]
-            return not t.armed and t.landed == "on_ground"
-
-        def done(t):  # type: ignore[no-untyped-def]
-            return start - (t.altitude or 0.0)
-
-        total, limit, outcome = start, 60.0 + start / 0.3, "landed"
+        total, limit, outcome = max(height, 0.1), 60.0 + height / 0.3, "landed"
+    elif action == "takeoff":
+        total, limit, outcome = numbers[0], 30.0 + numbers[0], "reached"
     else:
-        target = (0.0, 0.0, -numbers[0]) if action == "takeoff" else tuple(numbers)
-        first = link.telemetry().distance_to(target) if action == "goto" else numbers[0]
-
-        def check(t):  # type: ignore[no-untyped-def]
-            if action == "takeoff":
-                return t.altitude is not None and abs(t.altitude - numbers[0]) < 0.15
-            return t.distance_to(target) < 0.2
-
-        def done(t):  # type: ignore[no-untyped-def]
-            if action == "takeoff":
-                return t.altitude or 0.0
-            return first - t.distance_to(target)
-
+        target = (numbers[0], numbers[1], numbers[2])
+        first = tel.distance_to(target) if tel else 0.0
         total, limit, outcome = max(first, 0.1), 30.0 + first, "reached"
-    columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed:.1f}/"
-               "{task.total:.1f} m"), TimeElapsedColumn())  # fmt: skip
+
+    def progress(t: Telemetry) -> tuple[float, bool]:
+        if action == "land":
+            return height - (t.altitude or 0.0), not t.armed and t.landed == "on_ground"
+        if action == "takeoff":
+            alt = t.altitude or 0.0
+            return alt, t.landed == "in_air" and abs(alt - numbers[0]) < 0.15
+        dist = t.distance_to(target)
+        return total - dist, dist < 0.2
+
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed:.1f}/{task.total:.1f} m"),
+        TimeElapsedColumn(),
+    )
     with Progress(*columns, console=console, transient=True) as bar:
         task = bar.add_task(action, total=total)
-        tel = None
-        import time
-
         deadline = time.monotonic() + limit
         while time.monotonic() < deadline:
-            tel = link.telemetry()
-            if tel is not None:
-                bar.update(task, completed=max(0.0, min(total, done(tel))))
-                if check(tel):
+            t = link.telemetry()
+            if t is not None:
+                done, finished = progress(t)
+                bar.update(task, completed=max(0.0, min(total, done)))
+                if finished:
                     return outcome
-            if link.state.value == "lost":
+            if link.state == LinkState.LOST:
                 return "link_lost"
             time.sleep(0.05)
     return f"not_{outcome}"
 
 
-def _gesture(link, name, values, mapping, db, wait, console) -> dict:  # type: ignore[no-untyped-def]
+def _gesture(
+    link: MavlinkLink,
+    name: str,
+    gesture: str,
+    mapping: Path | None,
+    db: Path | None,
+    wait: bool,
+    console: Console,
+) -> dict[str, Any]:
+    """One gesture through the mapping and the safety rules, as the operator."""
     import time
 
     from proxima.drone.controller import DroneController
@@ -226,30 +284,43 @@ def _gesture(link, name, values, mapping, db, wait, console) -> dict:  # type: i
     controller = DroneController({name: link}, mapping=load_mapping(mapping), log=log)
     try:
         controller.safety.arm_control(name)
-        event = CommandEvent(t=time.time(), stream="cli", command=values[0], drone=name)
+        event = CommandEvent(t=time.time(), stream="cli", command=gesture, drone=name)
         outcome = controller.handle(event, source="cli")
-        out = {"status": outcome.status, "action": outcome.action, "reason": outcome.reason,
-               "log_id": outcome.log_id, "target": outcome.target,
-               "result": outcome.result.to_dict() if outcome.result else None}  # fmt: skip
-        if wait and outcome.status == "sent" and outcome.target is not None:
+        out: dict[str, Any] = {
+            "status": outcome.status,
+            "action": outcome.action,
+            "reason": outcome.reason,
+            "log_id": outcome.log_id,
+            "target": outcome.target,
+            "result": outcome.result.to_dict() if outcome.result else None,
+        }
+        target = outcome.target
+        if wait and outcome.status == "sent" and target is not None:
             with console.status("flying to the target ..."):
-                tel = link.wait_for(lambda t: t.distance_to(outcome.target) < 0.2, 30.0)
+                tel = link.wait_for(lambda t: t.distance_to(target) < 0.2, 30.0)
             out["outcome"] = "reached" if tel is not None else "not_reached"
         return out
     finally:
         controller.close()
 
 
-def _telemetry_dict(tel) -> dict | None:  # type: ignore[no-untyped-def]
+def _telemetry_dict(tel: Telemetry | None) -> dict[str, Any] | None:
     if tel is None:
         return None
-    return {"system_id": tel.system_id, "autopilot": tel.autopilot, "mode": tel.mode,
-            "armed": tel.armed, "landed": tel.landed, "position": tel.position,
-            "attitude": tel.attitude, "battery_pct": tel.battery_pct,
-            "global_position": tel.global_position}  # fmt: skip
+    return {
+        "system_id": tel.system_id,
+        "autopilot": tel.autopilot,
+        "mode": tel.mode,
+        "armed": tel.armed,
+        "landed": tel.landed,
+        "position": tel.position,
+        "attitude": tel.attitude,
+        "battery_pct": tel.battery_pct,
+        "global_position": tel.global_position,
+    }
 
 
-def _print(console, action: str, out: dict) -> None:  # type: ignore[no-untyped-def]
+def _print(console: Console, action: str, out: dict[str, Any]) -> None:
     from rich.table import Table
 
     table = Table(title=f"drone-cmd {action}", show_header=False)

@@ -36,8 +36,10 @@ from proxima.types import Event, LinkState
 
 # Modes from which a move may take the vehicle into its guided mode: the vehicle is only
 # holding position. Gestures never override LAND, RTL, a mission or a pilot's manual mode.
-_HOLDING = {"ardupilot": {"GUIDED", "LOITER", "BRAKE", "POSHOLD"},
-            "px4": {"OFFBOARD", "LOITER", "POSCTL"}}  # fmt: skip
+_HOLDING = {
+    "ardupilot": {"GUIDED", "LOITER", "BRAKE", "POSHOLD"},
+    "px4": {"OFFBOARD", "LOITER", "POSCTL"},
+}
 
 
 @dataclass(frozen=True)
@@ -114,8 +116,7 @@ class DroneController:
         self._subscription = bus.subscribe(types=("command", "arming", "pose", "action"))
         for name in self.links:
             self._queues[name] = queue.SimpleQueue()
-            t = threading.Thread(target=self._work, args=(name,), name=f"drone-{name}",
-                                 daemon=True)  # fmt: skip
+            t = threading.Thread(target=self._work, args=(name,), name=f"drone-{name}", daemon=True)
             t.start()
             self._threads.append(t)
         t = threading.Thread(target=self._dispatch, name="drone-dispatch", daemon=True)
@@ -201,8 +202,14 @@ class DroneController:
         drone, gesture = event.drone, event.command
         if confidence is None:
             confidence = self._confidence.get((event.stream, gesture))
-        base = {"drone": drone, "source": source, "command": gesture, "stream": event.stream,
-                "gesture_t": event.t, "confidence": confidence}  # fmt: skip
+        base = {
+            "drone": drone,
+            "source": source,
+            "command": gesture,
+            "stream": event.stream,
+            "gesture_t": event.t,
+            "confidence": confidence,
+        }
         try:
             mapped = self.mapping.lookup(gesture)
         except MappingError as exc:
@@ -219,16 +226,21 @@ class DroneController:
         drone, action = event.drone, mapped.action
         if action == "arm_control":
             self._set_control(drone, True)
-            return self._finish(event, base, action, "done", "gesture control armed",
-                                outcome="control_armed")  # fmt: skip
+            return self._finish(
+                event, base, action, "done", "gesture control armed", outcome="control_armed"
+            )
         if not self.safety.is_armed(drone):
-            return self._finish(event, base, action, "refused",
-                                "gesture control not armed (have_command first): nothing sent")  # fmt: skip
+            return self._finish(
+                event,
+                base,
+                action,
+                "refused",
+                "gesture control not armed (have_command first): nothing sent",
+            )
         if action == "none":
             return self._finish(event, base, action, "ignored", "mapped to no action")
         if link.state != LinkState.OK:
-            return self._finish(event, base, action, "refused",
-                                f"link {link.state}: nothing sent")  # fmt: skip
+            return self._finish(event, base, action, "refused", f"link {link.state}: nothing sent")
         tel = link.telemetry()
         if tel is None:
             return self._finish(event, base, action, "refused", "no telemetry yet")
@@ -263,29 +275,39 @@ class DroneController:
         return self._finish(event, base, action, "refused", f"unhandled action {action!r}")
 
     def _move(
-        self, event: CommandEvent, base: dict, mapped: MappedAction, link: DroneLink,
+        self,
+        event: CommandEvent,
+        base: dict,
+        mapped: MappedAction,
+        link: DroneLink,
         tel: Telemetry,
-    ) -> ControlOutcome:  # fmt: skip
-        drone, action = event.drone, mapped.action
+    ) -> ControlOutcome:
+        action = mapped.action
         if not tel.flying or tel.position is None:
             why = "not flying" if tel.position is not None else "no local position"
             return self._finish(event, base, action, "refused", f"{why}: nothing sent")
         holding = _HOLDING.get(tel.autopilot, _HOLDING["ardupilot"])
         if tel.mode not in holding:
-            return self._finish(event, base, action, "refused",
-                                f"vehicle in {tel.mode}: gestures do not override it")  # fmt: skip
+            return self._finish(
+                event,
+                base,
+                action,
+                "refused",
+                f"vehicle in {tel.mode}: gestures do not override it",
+            )
         step_len = mapped.step_m or self.mapping.step_m
         f, r, d = (c * step_len for c in mapped.direction or (0.0, 0.0, 0.0))
         yaw = tel.yaw
         step = (f * math.cos(yaw) - r * math.sin(yaw), f * math.sin(yaw) + r * math.cos(yaw), d)
+        guided = "OFFBOARD" if tel.autopilot == "px4" else "GUIDED"
         origin = tel.position
-        if tel.position_target is not None and tel.distance_to(tel.position_target) < 0.5:
-            origin = tel.position_target  # step from where the vehicle is settling
+        settling = tel.position_target
+        if tel.mode == guided and settling is not None and tel.distance_to(settling) < 0.5:
+            origin = settling  # step from where the vehicle is settling, not from noise
         target = (origin[0] + step[0], origin[1] + step[1], origin[2] + step[2])
         verdict: Verdict = self.safety.check_move(step, target)
         if not verdict.ok:
             return self._finish(event, base, action, "refused", verdict.reason, target=target)
-        guided = "OFFBOARD" if tel.autopilot == "px4" else "GUIDED"
         if tel.mode != guided:
             result = link.enter_guided()
             if not result.ok:
@@ -305,8 +327,13 @@ class DroneController:
         track: str | None = None,
         target: tuple[float, float, float] | None = None,
     ) -> ControlOutcome:
-        nothing_sent = result.ack in ("link_lost", "not_connected", "wrong_mode", "no_position",
-                                      "unknown_mode")  # fmt: skip
+        nothing_sent = result.ack in (
+            "link_lost",
+            "not_connected",
+            "wrong_mode",
+            "no_position",
+            "unknown_mode",
+        )
         if nothing_sent:
             status = "refused"
         else:
@@ -318,8 +345,9 @@ class DroneController:
             outcome = "done"
         elif status != "sent":
             outcome = status
-        out = self._finish(event, base, action, status, reason, result=result, outcome=outcome,
-                           target=target)  # fmt: skip
+        out = self._finish(
+            event, base, action, status, reason, result=result, outcome=outcome, target=target
+        )
         if status == "sent" and track is not None:
             self._track(event, out, track, target, link)
         return out
@@ -342,8 +370,15 @@ class DroneController:
         else:
             dist = tel.distance_to(target) if tel and target else 0.0
             timeout = 5.0 + 3.0 * dist / max(self._speed[event.drone], 0.1)
-        item = _Tracked(out.log_id, event.command, kind, event.t, event.stream, target,
-                        time.monotonic() + timeout)  # fmt: skip
+        item = _Tracked(
+            out.log_id,
+            event.command,
+            kind,
+            event.t,
+            event.stream,
+            target,
+            time.monotonic() + timeout,
+        )
         with self._track_lock:
             old = self._tracked.get(event.drone)
             self._tracked[event.drone] = item
@@ -367,33 +402,63 @@ class DroneController:
         log_id = None
         if self.log is not None:
             now = datetime.now(UTC)
-            fields: dict[str, Any] = {**base, "action": action, "status": status,
-                                      "reason": reason, "outcome": outcome}  # fmt: skip
+            fields: dict[str, Any] = {
+                **base,
+                "action": action,
+                "status": status,
+                "reason": reason,
+                "outcome": outcome,
+            }
             if result is not None:
-                fields.update(sent=result.sent or None, ack=result.ack, attempts=result.attempts,
-                              sent_at=now if status in ("sent", "failed") else None,
-                              acked_at=now if result.confirmed else None)  # fmt: skip
+                fields.update(
+                    sent=result.sent or None,
+                    ack=result.ack,
+                    attempts=result.attempts,
+                    sent_at=now if status in ("sent", "failed") else None,
+                    acked_at=now if result.confirmed else None,
+                )
                 if result.latency_s is not None:
                     fields["ack_latency_ms"] = result.latency_s * 1000.0
             if outcome is not None and outcome not in ("refused", "ignored", "failed"):
                 fields["completed_at"] = now
             log_id = self.log.add(**fields)
-        out = ControlOutcome(event.drone, event.command, action, status, reason, result, log_id,
-                             target)  # fmt: skip
-        self._publish(CommandResultEvent(
-            t=event.t, stream=event.stream, drone=event.drone, command=event.command,
-            action=action, status=status, ack=result.ack if result else "",
-            outcome=outcome or "", reason=reason, gesture_t=event.t,
-            latency_s=result.latency_s if result else None, log_id=log_id))  # fmt: skip
+        out = ControlOutcome(
+            event.drone, event.command, action, status, reason, result, log_id, target
+        )
+        self._publish(
+            CommandResultEvent(
+                t=event.t,
+                stream=event.stream,
+                drone=event.drone,
+                command=event.command,
+                action=action,
+                status=status,
+                ack=result.ack if result else "",
+                outcome=outcome or "",
+                reason=reason,
+                gesture_t=event.t,
+                latency_s=result.latency_s if result else None,
+                log_id=log_id,
+            )
+        )
         return out
 
     def _outcome(self, drone: str, item: _Tracked, outcome: str) -> None:
         if self.log is not None and item.log_id is not None:
             self.log.update(item.log_id, outcome=outcome, completed_at=datetime.now(UTC))
-        self._publish(CommandResultEvent(
-            t=item.gesture_t, stream=item.stream, drone=drone, command=item.command,
-            action=item.action, status="done", outcome=outcome, gesture_t=item.gesture_t,
-            log_id=item.log_id))  # fmt: skip
+        self._publish(
+            CommandResultEvent(
+                t=item.gesture_t,
+                stream=item.stream,
+                drone=drone,
+                command=item.command,
+                action=item.action,
+                status="done",
+                outcome=outcome,
+                gesture_t=item.gesture_t,
+                log_id=item.log_id,
+            )
+        )
 
     def _publish(self, event: Event) -> None:
         if self.bus is not None:
@@ -407,8 +472,14 @@ class DroneController:
                 self._check_operator()
                 self._check_outcomes()
             except Exception as exc:  # never let the watchdog die silently
-                self._publish(DroneAlarmEvent(t=time.time(), drone="", kind="controller_error",
-                                              message=f"{type(exc).__name__}: {exc}"))  # fmt: skip
+                self._publish(
+                    DroneAlarmEvent(
+                        t=time.time(),
+                        drone="",
+                        kind="controller_error",
+                        message=f"{type(exc).__name__}: {exc}",
+                    )
+                )
 
     def _check_links(self) -> None:
         for name, link in self.links.items():
@@ -422,9 +493,15 @@ class DroneController:
                 if item is not None:
                     self._outcome(name, item, "link_lost")
                 note = "; gesture control disarmed: have_command again" if armed else ""
-                self._publish(DroneAlarmEvent(t=time.time(), stream=name, drone=name,
-                                              kind="link_lost",
-                                              message=f"{name}: link lost, nothing is sent{note}"))  # fmt: skip
+                self._publish(
+                    DroneAlarmEvent(
+                        t=time.time(),
+                        stream=name,
+                        drone=name,
+                        kind="link_lost",
+                        message=f"{name}: link lost, nothing is sent{note}",
+                    )
+                )
 
     def _check_operator(self) -> None:
         if self._operator_lost_handled or not self.safety.operator_lost():
@@ -435,16 +512,27 @@ class DroneController:
             tel = link.telemetry()
             if not self.safety.is_armed(name) or tel is None or not tel.flying:
                 continue
-            self._publish(DroneAlarmEvent(t=time.time(), stream=name, drone=name,
-                                          kind="operator_lost",
-                                          message=f"operator not seen for {after:.0f} s: "
-                                                  f"{name} hovers"))  # fmt: skip
+            self._publish(
+                DroneAlarmEvent(
+                    t=time.time(),
+                    stream=name,
+                    drone=name,
+                    kind="operator_lost",
+                    message=f"operator not seen for {after:.0f} s: {name} hovers",
+                )
+            )
             event = CommandEvent(t=time.time(), stream="", command="hover", drone=name)
             threading.Thread(target=self._watchdog_hold, args=(event,), daemon=True).start()
 
     def _watchdog_hold(self, event: CommandEvent) -> None:
-        base = {"drone": event.drone, "source": "watchdog", "command": "operator_lost",
-                "stream": "", "gesture_t": event.t, "confidence": None}  # fmt: skip
+        base = {
+            "drone": event.drone,
+            "source": "watchdog",
+            "command": "operator_lost",
+            "stream": "",
+            "gesture_t": event.t,
+            "confidence": None,
+        }
         link = self.links[event.drone]
         with self._locks[event.drone]:
             if link.state != LinkState.OK:
@@ -487,11 +575,22 @@ class DroneController:
             raise KeyError(f"unknown drone {drone!r}")
         req = self.safety.request_emergency_stop(drone, kind)
         event = CommandEvent(t=time.time(), stream="", command="emergency_stop", drone=drone)
-        base = {"drone": drone, "source": "api", "command": "emergency_stop", "stream": "",
-                "gesture_t": None, "confidence": None}  # fmt: skip
-        self._finish(event, base, f"request_{kind}", "pending",
-                     f"awaiting confirmation within {req.confirm_within_s:.0f} s",
-                     outcome="awaiting_confirmation")  # fmt: skip
+        base = {
+            "drone": drone,
+            "source": "api",
+            "command": "emergency_stop",
+            "stream": "",
+            "gesture_t": None,
+            "confidence": None,
+        }
+        self._finish(
+            event,
+            base,
+            f"request_{kind}",
+            "pending",
+            f"awaiting confirmation within {req.confirm_within_s:.0f} s",
+            outcome="awaiting_confirmation",
+        )
         return req
 
     def confirm_emergency_stop(self, token: str, drone: str | None = None) -> ControlOutcome:
@@ -506,12 +605,24 @@ class DroneController:
         drone = req.drone
         self._set_control(drone, False)
         link = self.links[drone]
-        self._publish(DroneAlarmEvent(t=time.time(), stream=drone, drone=drone,
-                                      kind="emergency_stop",
-                                      message=f"emergency stop ({req.kind}) confirmed"))  # fmt: skip
+        self._publish(
+            DroneAlarmEvent(
+                t=time.time(),
+                stream=drone,
+                drone=drone,
+                kind="emergency_stop",
+                message=f"emergency stop ({req.kind}) confirmed",
+            )
+        )
         event = CommandEvent(t=time.time(), stream="", command="emergency_stop", drone=drone)
-        base = {"drone": drone, "source": "api", "command": "emergency_stop", "stream": "",
-                "gesture_t": None, "confidence": None}  # fmt: skip
+        base = {
+            "drone": drone,
+            "source": "api",
+            "command": "emergency_stop",
+            "stream": "",
+            "gesture_t": None,
+            "confidence": None,
+        }
         result = link.land() if req.kind == "land" else link.disarm(force=True)
         track = "land" if req.kind == "land" else None
         return self._sent(event, base, req.kind, result, link, track=track)
@@ -528,8 +639,12 @@ class EmergencyStopService:
     def request(self, drone: str, user: str) -> dict[str, Any]:
         """Raises: KeyError: unknown drone."""
         req = self.controller.request_emergency_stop(drone, self.kind)
-        return {"confirmation_id": req.token, "expires_in_s": req.confirm_within_s,
-                "kind": req.kind, "requested_by": user}  # fmt: skip
+        return {
+            "confirmation_id": req.token,
+            "expires_in_s": req.confirm_within_s,
+            "kind": req.kind,
+            "requested_by": user,
+        }
 
     def confirm(self, drone: str, confirmation_id: str, user: str) -> dict[str, Any]:
         """Raises: KeyError: unknown drone.  PermissionError: bad, used or late id."""
@@ -537,5 +652,9 @@ class EmergencyStopService:
             raise KeyError(drone)
         out = self.controller.confirm_emergency_stop(confirmation_id, drone=drone)
         detail = out.reason or (out.result.ack if out.result else out.status)
-        return {"ok": out.status == "sent", "detail": detail, "log_id": out.log_id,
-                "confirmed_by": user}  # fmt: skip
+        return {
+            "ok": out.status == "sent",
+            "detail": detail,
+            "log_id": out.log_id,
+            "confirmed_by": user,
+        }

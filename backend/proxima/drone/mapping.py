@@ -87,8 +87,15 @@ class CommandMapping:
         rows = []
         for gesture in GESTURES:
             a = self.actions[gesture]
-            rows.append({"gesture": gesture, "action": a.action, "direction": a.direction,
-                         "step_m": a.step_m, "factor": a.factor})  # fmt: skip
+            rows.append(
+                {
+                    "gesture": gesture,
+                    "action": a.action,
+                    "direction": a.direction,
+                    "step_m": a.step_m,
+                    "factor": a.factor,
+                }
+            )
         return rows
 
 
@@ -119,10 +126,12 @@ def load_mapping(path: str | Path | None = None) -> CommandMapping:
         if key not in ("step_m", "cruise_speed_m_s", "min_speed_m_s"):
             raise fail("settings", f"unknown field settings.{key}")
     step = _positive(settings.get("step_m", 1.0), "settings.step_m", fail, "settings")
-    cruise = _positive(settings.get("cruise_speed_m_s", 5.0), "settings.cruise_speed_m_s",
-                       fail, "settings")  # fmt: skip
-    min_speed = _positive(settings.get("min_speed_m_s", 0.5), "settings.min_speed_m_s",
-                          fail, "settings")  # fmt: skip
+    cruise = _positive(
+        settings.get("cruise_speed_m_s", 5.0), "settings.cruise_speed_m_s", fail, "settings"
+    )
+    min_speed = _positive(
+        settings.get("min_speed_m_s", 0.5), "settings.min_speed_m_s", fail, "settings"
+    )
     for key in data:
         if key not in ("settings", "gestures"):
             raise fail(key, f"unknown table [{key}] (expected [settings] and [gestures.*])")
@@ -152,8 +161,10 @@ def load_mapping(path: str | Path | None = None) -> CommandMapping:
         actions[gesture] = MappedAction(gesture, action, direction, step_m, factor)
     missing = [g for g in GESTURES if g not in actions]
     if missing:
-        raise MappingError(f"{path}: no entry for gesture(s) {', '.join(missing)}; "
-                           "every gesture must be mapped (use action = \"none\")")  # fmt: skip
+        raise MappingError(
+            f"{path}: no entry for gesture(s) {', '.join(missing)}; "
+            'every gesture must be mapped (use action = "none")'
+        )
     return CommandMapping(actions, step, cruise, min_speed, str(path))
 
 
@@ -165,9 +176,7 @@ def _positive(value: object, name: str, fail: _Fail, where: str) -> float:
     return float(value)
 
 
-def _direction(
-    value: object, name: str, fail: _Fail, where: str
-) -> tuple[float, float, float]:
+def _direction(value: object, name: str, fail: _Fail, where: str) -> tuple[float, float, float]:
     if not isinstance(value, list) or len(value) != 3:
         raise fail(where, f"{name} must be [forward, right, down], got {value!r}")
     if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):

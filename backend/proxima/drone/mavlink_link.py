@@ -13,6 +13,7 @@ serial device `/dev/ttyUSB0,57600`.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import queue
@@ -31,7 +32,7 @@ from proxima.events import EventBus
 from proxima.types import LinkState
 
 os.environ.setdefault("MAVLINK20", "1")  # speak MAVLink 2, as ArduPilot and PX4 do
-from pymavlink import mavutil  # noqa: E402
+from pymavlink import mavutil
 
 mavutil.set_dialect("ardupilotmega")
 mav = mavutil.mavlink
@@ -40,12 +41,23 @@ FORCE_DISARM_MAGIC = 21196
 POSITION_ONLY_MASK = 0b110111111000  # use x, y, z; ignore velocity, acceleration, yaw rate
 IGNORE_YAW = 0b10000000000
 _LANDED = {0: "unknown", 1: "on_ground", 2: "in_air", 3: "takeoff", 4: "landing"}
-_RESULTS = {0: "accepted", 1: "temporarily_rejected", 2: "denied", 3: "unsupported",
-            4: "failed", 5: "in_progress", 6: "cancelled"}  # fmt: skip
+_RESULTS = {
+    0: "accepted",
+    1: "temporarily_rejected",
+    2: "denied",
+    3: "unsupported",
+    4: "failed",
+    5: "in_progress",
+    6: "cancelled",
+}
 _NOT_VEHICLES = {
-    mav.MAV_TYPE_GCS, mav.MAV_TYPE_GIMBAL, mav.MAV_TYPE_CAMERA, mav.MAV_TYPE_ADSB,
-    mav.MAV_TYPE_ONBOARD_CONTROLLER, mav.MAV_TYPE_ANTENNA_TRACKER,
-}  # fmt: skip
+    mav.MAV_TYPE_GCS,
+    mav.MAV_TYPE_GIMBAL,
+    mav.MAV_TYPE_CAMERA,
+    mav.MAV_TYPE_ADSB,
+    mav.MAV_TYPE_ONBOARD_CONTROLLER,
+    mav.MAV_TYPE_ANTENNA_TRACKER,
+}
 STREAMED = (
     mav.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
     mav.MAVLINK_MSG_ID_ATTITUDE,
@@ -142,13 +154,16 @@ class MavlinkLink(DroneLink):
     # --- life cycle -------------------------------------------------------------------
     def connect(self, timeout: float = 10.0) -> None:
         if self._thread is None:
-            self._thread = threading.Thread(target=self._run, name=f"mavlink-{self.name}",
-                                            daemon=True)  # fmt: skip
+            self._thread = threading.Thread(
+                target=self._run, name=f"mavlink-{self.name}", daemon=True
+            )
             self._thread.start()
         if not self._first_heartbeat.wait(timeout):
             why = f" ({self._open_error})" if self._open_error else ""
-            raise LinkError(f"{self.name}: no heartbeat from a vehicle on {self.connection} "
-                            f"within {timeout:.0f} s{why}")  # fmt: skip
+            raise LinkError(
+                f"{self.name}: no heartbeat from a vehicle on {self.connection} "
+                f"within {timeout:.0f} s{why}"
+            )
 
     def close(self) -> None:
         self._stop.set()
@@ -156,10 +171,8 @@ class MavlinkLink(DroneLink):
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=3.0)
         for fd in (self._wake_r, self._wake_w):
-            try:
+            with contextlib.suppress(OSError):
                 os.close(fd)
-            except OSError:
-                pass
         self._wake_r = self._wake_w = -1
 
     @property
@@ -210,8 +223,14 @@ class MavlinkLink(DroneLink):
         try:
             return pending.future.result(timeout=limit)
         except TimeoutError:
-            return CommandResult(action, "timeout", False, pending.attempts, sent=sent,
-                                 detail="link thread did not answer")  # fmt: skip
+            return CommandResult(
+                action,
+                "timeout",
+                False,
+                pending.attempts,
+                sent=sent,
+                detail="link thread did not answer",
+            )
 
     def set_mode(self, mode: str) -> CommandResult:
         mode = mode.upper()
@@ -220,15 +239,17 @@ class MavlinkLink(DroneLink):
             return CommandResult(f"mode {mode}", "not_connected", False)
         if tel.autopilot == "px4":
             if mode not in mavutil.px4_map:
-                return CommandResult(f"mode {mode}", "unknown_mode", False,
-                                     detail=f"PX4 has no mode {mode!r}")  # fmt: skip
+                return CommandResult(
+                    f"mode {mode}", "unknown_mode", False, detail=f"PX4 has no mode {mode!r}"
+                )
             base, main, sub = mavutil.px4_map[mode]
             params = [base, main, sub]
         else:
             mapping = mavutil.mode_mapping_byname(self._vehicle_type) or {}
             if mode not in mapping:
-                return CommandResult(f"mode {mode}", "unknown_mode", False,
-                                     detail=f"ArduPilot has no mode {mode!r}")  # fmt: skip
+                return CommandResult(
+                    f"mode {mode}", "unknown_mode", False, detail=f"ArduPilot has no mode {mode!r}"
+                )
             params = [mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, mapping[mode]]
         result = self.command_long(f"mode {mode}", mav.MAV_CMD_DO_SET_MODE, params)
         if result.ok:
@@ -252,8 +273,12 @@ class MavlinkLink(DroneLink):
         if tel.autopilot != "px4":
             return self.set_mode("GUIDED")
         if tel.position is None:
-            return CommandResult("enter_guided", "no_position", False,
-                                 detail="OFFBOARD needs a local position to hold")  # fmt: skip
+            return CommandResult(
+                "enter_guided",
+                "no_position",
+                False,
+                detail="OFFBOARD needs a local position to hold",
+            )
         if self._setpoint is None:
             self._set_stream(_Setpoint(tel.position, tel.yaw))
             time.sleep(3.5 / self.cfg.setpoint_hz)  # PX4 wants the stream before the switch
@@ -283,8 +308,9 @@ class MavlinkLink(DroneLink):
             if home_amsl is None and tel.global_position and tel.relative_alt is not None:
                 home_amsl = tel.global_position[2] - tel.relative_alt
             if home_amsl is None:
-                return CommandResult("takeoff", "no_position", False,
-                                     detail="PX4 takeoff needs the home altitude")  # fmt: skip
+                return CommandResult(
+                    "takeoff", "no_position", False, detail="PX4 takeoff needs the home altitude"
+                )
             steps = [lambda: self.arm()]
             nan = math.nan
             params = [0, 0, 0, nan, nan, nan, home_amsl + altitude_m]
@@ -294,24 +320,42 @@ class MavlinkLink(DroneLink):
         for step in steps:
             result = step()
             if not result.ok:
-                return CommandResult("takeoff", result.ack, False, result.attempts,
-                                     result.latency_s, result.confirmed, result.sent,
-                                     f"{result.action} failed: {result.detail}")  # fmt: skip
+                return CommandResult(
+                    "takeoff",
+                    result.ack,
+                    False,
+                    result.attempts,
+                    result.latency_s,
+                    result.confirmed,
+                    result.sent,
+                    f"{result.action} failed: {result.detail}",
+                )
         return self.command_long("takeoff", mav.MAV_CMD_NAV_TAKEOFF, params)
 
     def goto_local(
         self, north: float, east: float, down: float, yaw: float | None = None
     ) -> CommandResult:
-        sent = {"msg": "SET_POSITION_TARGET_LOCAL_NED", "frame": "LOCAL_NED",
-                "x": north, "y": east, "z": down, "yaw": yaw}  # fmt: skip
+        sent = {
+            "msg": "SET_POSITION_TARGET_LOCAL_NED",
+            "frame": "LOCAL_NED",
+            "x": north,
+            "y": east,
+            "z": down,
+            "yaw": yaw,
+        }
         refusal = self._refusal("goto", sent)
         if refusal is not None:
             return refusal
         tel = self.telemetry()
         if tel is not None and tel.mode != self.guided_mode():
-            return CommandResult("goto", "wrong_mode", False, sent=sent,
-                                 detail=f"vehicle in {tel.mode}, not {self.guided_mode()}: "
-                                 "call enter_guided() first; nothing sent")  # fmt: skip
+            return CommandResult(
+                "goto",
+                "wrong_mode",
+                False,
+                sent=sent,
+                detail=f"vehicle in {tel.mode}, not {self.guided_mode()}: "
+                "call enter_guided() first; nothing sent",
+            )
         target = (float(north), float(east), float(down))
         t0 = time.monotonic()
         if self.autopilot == "px4":
@@ -324,11 +368,18 @@ class MavlinkLink(DroneLink):
                 echo_at = self._s.target_echo_at
                 echo = self._s.fields.get("position_target")
             if echo_at > t0 and echo is not None and math.dist(echo, target) < 0.05:
-                return CommandResult("goto", "echoed", True, 1, time.monotonic() - t0, True,
-                                     sent)  # fmt: skip
+                return CommandResult("goto", "echoed", True, 1, time.monotonic() - t0, True, sent)
             time.sleep(0.005)
-        return CommandResult("goto", "sent", True, 1, None, False, sent,
-                             "no POSITION_TARGET_LOCAL_NED echo: unconfirmed")  # fmt: skip
+        return CommandResult(
+            "goto",
+            "sent",
+            True,
+            1,
+            None,
+            False,
+            sent,
+            "no POSITION_TARGET_LOCAL_NED echo: unconfirmed",
+        )
 
     def hold(self) -> CommandResult:
         tel = self.telemetry()
@@ -347,32 +398,43 @@ class MavlinkLink(DroneLink):
         vel = tel.velocity or (0.0, 0.0, 0.0)
         stop = [p + v * abs(v) / (2 * a) for p, v in zip(tel.position, vel, strict=True)]
         result = self.goto_local(stop[0], stop[1], stop[2])
-        return CommandResult("hold", result.ack, result.ok, result.attempts, result.latency_s,
-                             result.confirmed, result.sent, result.detail)  # fmt: skip
+        return CommandResult(
+            "hold",
+            result.ack,
+            result.ok,
+            result.attempts,
+            result.latency_s,
+            result.confirmed,
+            result.sent,
+            result.detail,
+        )
 
     def change_speed(self, speed_m_s: float) -> CommandResult:
-        return self.command_long("change_speed", mav.MAV_CMD_DO_CHANGE_SPEED,
-                                 [1, speed_m_s, -1])  # fmt: skip
+        return self.command_long("change_speed", mav.MAV_CMD_DO_CHANGE_SPEED, [1, speed_m_s, -1])
 
     def land(self) -> CommandResult:
         self._set_stream(None)
-        return self.command_long("land", mav.MAV_CMD_NAV_LAND,
-                                 [0, 0, 0, math.nan, math.nan, math.nan, 0])  # fmt: skip
+        return self.command_long(
+            "land", mav.MAV_CMD_NAV_LAND, [0, 0, 0, math.nan, math.nan, math.nan, 0]
+        )
 
     def set_message_interval(self, msg_id: int, rate_hz: float) -> CommandResult:
         """Ask for a message at `rate_hz` (0 stops it)."""
         interval = 1e6 / rate_hz if rate_hz > 0 else -1
-        return self.command_long("message_interval", mav.MAV_CMD_SET_MESSAGE_INTERVAL,
-                                 [msg_id, interval])  # fmt: skip
+        return self.command_long(
+            "message_interval", mav.MAV_CMD_SET_MESSAGE_INTERVAL, [msg_id, interval]
+        )
 
     # --- thread side ------------------------------------------------------------------
     def _refusal(self, action: str, sent: dict) -> CommandResult | None:
         if self._state == LinkState.LOST:
-            return CommandResult(action, "link_lost", False, sent=sent,
-                                 detail="link lost: nothing sent")  # fmt: skip
+            return CommandResult(
+                action, "link_lost", False, sent=sent, detail="link lost: nothing sent"
+            )
         if self._state != LinkState.OK or self._target is None:
-            return CommandResult(action, "not_connected", False, sent=sent,
-                                 detail="no heartbeat yet: nothing sent")  # fmt: skip
+            return CommandResult(
+                action, "not_connected", False, sent=sent, detail="no heartbeat yet: nothing sent"
+            )
         if self._stop.is_set():
             return CommandResult(action, "not_connected", False, sent=sent, detail="closed")
         return None
@@ -382,10 +444,8 @@ class MavlinkLink(DroneLink):
         self._wake()
 
     def _wake(self) -> None:
-        try:
+        with contextlib.suppress(OSError):  # a full pipe already wakes the thread
             os.write(self._wake_w, b"x")
-        except (BlockingIOError, OSError):
-            pass
 
     def _set_stream(self, setpoint: _Setpoint | None) -> None:
         def op(conn: Any) -> None:
@@ -433,8 +493,9 @@ class MavlinkLink(DroneLink):
                     op(conn)
                 now = time.monotonic()
                 if now >= next_hb:
-                    conn.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0,
-                                            mav.MAV_STATE_ACTIVE)  # fmt: skip
+                    conn.mav.heartbeat_send(
+                        mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, mav.MAV_STATE_ACTIVE
+                    )
                     next_hb = now + 1.0 / self.cfg.heartbeat_hz
                 self._check_pending(conn, now)
                 if self._setpoint is not None and now >= next_sp:
@@ -459,10 +520,8 @@ class MavlinkLink(DroneLink):
 
     def _close_conn(self) -> None:
         if self._conn is not None:
-            try:
+            with contextlib.suppress(Exception):  # closing a broken connection may fail
                 self._conn.close()
-            except Exception:
-                pass
             self._conn = None
 
     def _sleep(self, conn: Any, wait: float) -> None:
@@ -555,8 +614,10 @@ class MavlinkLink(DroneLink):
         elif self._state == LinkState.OK and silent:
             self._state = LinkState.LOST
             self._fail_all("link_lost", f"no heartbeat for {self.cfg.lost_after_s:.0f} s")
-            self._alarm("link_lost", f"{self.name}: no heartbeat for "
-                                     f"{self.cfg.lost_after_s:.0f} s; commands stopped")  # fmt: skip
+            self._alarm(
+                "link_lost",
+                f"{self.name}: no heartbeat for {self.cfg.lost_after_s:.0f} s; commands stopped",
+            )
             self._publish_state()
 
     def _on_first_heartbeat(self) -> None:
@@ -567,14 +628,28 @@ class MavlinkLink(DroneLink):
         if self.cfg.telemetry_hz > 0:
             for msg_id in STREAMED:
                 interval = 1e6 / self.cfg.telemetry_hz
-                self._enqueue_command(conn, _Pending(
-                    "message_interval", mav.MAV_CMD_SET_MESSAGE_INTERVAL,
-                    [msg_id, interval, 0, 0, 0, 0, 0], Future(),
-                    self.cfg.ack_timeout_s, self.cfg.retries))  # fmt: skip
-        self._enqueue_command(conn, _Pending(
-            "request_home", mav.MAV_CMD_REQUEST_MESSAGE,
-            [mav.MAVLINK_MSG_ID_HOME_POSITION, 0, 0, 0, 0, 0, 0], Future(),
-            self.cfg.ack_timeout_s, self.cfg.retries))  # fmt: skip
+                self._enqueue_command(
+                    conn,
+                    _Pending(
+                        "message_interval",
+                        mav.MAV_CMD_SET_MESSAGE_INTERVAL,
+                        [msg_id, interval, 0, 0, 0, 0, 0],
+                        Future(),
+                        self.cfg.ack_timeout_s,
+                        self.cfg.retries,
+                    ),
+                )
+        self._enqueue_command(
+            conn,
+            _Pending(
+                "request_home",
+                mav.MAV_CMD_REQUEST_MESSAGE,
+                [mav.MAVLINK_MSG_ID_HOME_POSITION, 0, 0, 0, 0, 0, 0],
+                Future(),
+                self.cfg.ack_timeout_s,
+                self.cfg.retries,
+            ),
+        )
 
     def _enqueue_command(self, conn: Any, p: _Pending) -> None:
         if self._state != LinkState.OK:
@@ -590,8 +665,9 @@ class MavlinkLink(DroneLink):
         assert self._target is not None
         if p.attempts == 0:
             p.first_sent = now
-        conn.mav.command_long_send(self._target[0], self._target[1], p.command,
-                                   min(p.attempts, 255), *p.params)  # fmt: skip
+        conn.mav.command_long_send(
+            self._target[0], self._target[1], p.command, min(p.attempts, 255), *p.params
+        )
         self.sent_counts["COMMAND_LONG"] += 1
         p.attempts += 1
         p.deadline = now + p.timeout
@@ -601,8 +677,21 @@ class MavlinkLink(DroneLink):
             return
         mask = POSITION_ONLY_MASK | (IGNORE_YAW if sp.yaw is None else 0)
         conn.mav.set_position_target_local_ned_send(
-            self._boot_ms(), self._target[0], self._target[1], mav.MAV_FRAME_LOCAL_NED, mask,
-            *sp.position, 0, 0, 0, 0, 0, 0, sp.yaw or 0.0, 0)  # fmt: skip
+            self._boot_ms(),
+            self._target[0],
+            self._target[1],
+            mav.MAV_FRAME_LOCAL_NED,
+            mask,
+            *sp.position,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            sp.yaw or 0.0,
+            0,
+        )
         self.sent_counts["SET_POSITION_TARGET_LOCAL_NED"] += 1
         sp.sent_at = time.monotonic()
 
@@ -622,8 +711,12 @@ class MavlinkLink(DroneLink):
             p.deadline = now + self.cfg.in_progress_timeout_s
             return
         ok = result == "accepted"
-        self._resolve(p, CommandResult(p.action, result, ok, p.attempts, now - p.first_sent,
-                                       True, self._sent(p)))  # fmt: skip
+        self._resolve(
+            p,
+            CommandResult(
+                p.action, result, ok, p.attempts, now - p.first_sent, True, self._sent(p)
+            ),
+        )
 
     def _sent(self, p: _Pending) -> dict:
         return {"msg": "COMMAND_LONG", "command": _cmd_name(p.command), "params": p.params}
@@ -647,9 +740,19 @@ class MavlinkLink(DroneLink):
             if p.attempts <= p.retries:
                 self._send_command(conn, p, now)
             else:
-                self._resolve(p, CommandResult(
-                    p.action, "timeout", False, p.attempts, None, False, self._sent(p),
-                    f"no COMMAND_ACK after {p.attempts} attempts"))  # fmt: skip
+                self._resolve(
+                    p,
+                    CommandResult(
+                        p.action,
+                        "timeout",
+                        False,
+                        p.attempts,
+                        None,
+                        False,
+                        self._sent(p),
+                        f"no COMMAND_ACK after {p.attempts} attempts",
+                    ),
+                )
 
     def _next_deadline(self, now: float) -> float:
         deadlines = [line[0].deadline for line in self._pending.values() if line]
@@ -659,8 +762,11 @@ class MavlinkLink(DroneLink):
         for line in self._pending.values():
             for p in line:
                 if not p.future.done():
-                    p.future.set_result(CommandResult(p.action, ack, False, p.attempts,
-                                                      sent=self._sent(p), detail=detail))  # fmt: skip
+                    p.future.set_result(
+                        CommandResult(
+                            p.action, ack, False, p.attempts, sent=self._sent(p), detail=detail
+                        )
+                    )
         self._pending.clear()
         self._setpoint = None
 
@@ -669,14 +775,25 @@ class MavlinkLink(DroneLink):
         if self.bus is None:
             return
         tel = self.telemetry()
-        common = {"t": time.time(), "stream": self.name, "drone": self.name,
-                  "link": str(self._state), "gesture_control": self.gesture_control}  # fmt: skip
+        now, link = time.time(), str(self._state)
         if tel is None:
-            self.bus.publish(DroneStateEvent(**common))
+            self.bus.publish(
+                DroneStateEvent(
+                    t=now,
+                    stream=self.name,
+                    drone=self.name,
+                    link=link,
+                    gesture_control=self.gesture_control,
+                )
+            )
             return
         self.bus.publish(
             DroneStateEvent(
-                **common,
+                t=now,
+                stream=self.name,
+                drone=self.name,
+                link=link,
+                gesture_control=self.gesture_control,
                 autopilot=tel.autopilot,
                 mode=tel.mode,
                 armed=tel.armed,
@@ -693,8 +810,16 @@ class MavlinkLink(DroneLink):
 
     def _alarm(self, kind: str, message: str, active: bool = True) -> None:
         if self.bus is not None:
-            self.bus.publish(DroneAlarmEvent(t=time.time(), stream=self.name, drone=self.name,
-                                             kind=kind, message=message, active=active))  # fmt: skip
+            self.bus.publish(
+                DroneAlarmEvent(
+                    t=time.time(),
+                    stream=self.name,
+                    drone=self.name,
+                    kind=kind,
+                    message=message,
+                    active=active,
+                )
+            )
 
 
 def _rounded(v: tuple[float, ...] | None) -> list[float] | None:

@@ -36,8 +36,13 @@ class SafetyConfig:
     estop_confirm_s: float = 10.0
 
     def __post_init__(self) -> None:
-        for name in ("geofence_radius_m", "max_altitude_m", "max_step_m", "operator_lost_s",
-                     "estop_confirm_s"):  # fmt: skip
+        for name in (
+            "geofence_radius_m",
+            "max_altitude_m",
+            "max_step_m",
+            "operator_lost_s",
+            "estop_confirm_s",
+        ):
             if not getattr(self, name) > 0:
                 raise ValueError(f"SafetyConfig.{name} must be positive")
         if not 0 <= self.min_altitude_m < self.max_altitude_m:
@@ -85,8 +90,9 @@ class SafetyGate:
     """The state the rules need (armed drones, last command times, operator sightings,
     pending emergency stops). Thread-safe; time comes from `clock` (monotonic seconds)."""
 
-    def __init__(self, config: SafetyConfig | None = None,
-                 clock: Callable[[], float] = time.monotonic) -> None:  # fmt: skip
+    def __init__(
+        self, config: SafetyConfig | None = None, clock: Callable[[], float] = time.monotonic
+    ) -> None:
         self.cfg = config or SafetyConfig()
         self.clock = clock
         self._lock = threading.Lock()
@@ -122,15 +128,24 @@ class SafetyGate:
             return Verdict(False, f"step {length:.2f} m exceeds max_step_m {c.max_step_m:.2f}")
         radius = math.hypot(target[0] - home[0], target[1] - home[1])
         if radius > c.geofence_radius_m:
-            return Verdict(False, f"geofence: target {radius:.1f} m from home exceeds radius "
-                                  f"{c.geofence_radius_m:.1f} m")  # fmt: skip
+            return Verdict(
+                False,
+                f"geofence: target {radius:.1f} m from home exceeds radius "
+                f"{c.geofence_radius_m:.1f} m",
+            )
         altitude = home[2] - target[2]
         if altitude > c.max_altitude_m:
-            return Verdict(False, f"geofence: target altitude {altitude:.1f} m above "
-                                  f"max_altitude_m {c.max_altitude_m:.1f}")  # fmt: skip
+            return Verdict(
+                False,
+                f"geofence: target altitude {altitude:.1f} m above "
+                f"max_altitude_m {c.max_altitude_m:.1f}",
+            )
         if altitude < c.min_altitude_m:
-            return Verdict(False, f"geofence: target altitude {altitude:.1f} m below "
-                                  f"min_altitude_m {c.min_altitude_m:.1f} (use land)")  # fmt: skip
+            return Verdict(
+                False,
+                f"geofence: target altitude {altitude:.1f} m below "
+                f"min_altitude_m {c.min_altitude_m:.1f} (use land)",
+            )
         return OK
 
     def check_rate(self, drone: str, action: str) -> Verdict:
@@ -141,8 +156,11 @@ class SafetyGate:
         if last is not None:
             since = self.clock() - last
             if since < self.cfg.min_interval_s:
-                return Verdict(False, f"rate limit: {since:.2f} s since the last command, "
-                                      f"min_interval_s is {self.cfg.min_interval_s:.2f}")  # fmt: skip
+                return Verdict(
+                    False,
+                    f"rate limit: {since:.2f} s since the last command, "
+                    f"min_interval_s is {self.cfg.min_interval_s:.2f}",
+                )
         return OK
 
     def note_sent(self, drone: str) -> None:
@@ -172,8 +190,9 @@ class SafetyGate:
         if kind not in ("land", "kill"):
             raise ValueError(f"emergency stop kind must be 'land' or 'kill', got {kind!r}")
         window = self.cfg.estop_confirm_s
-        req = EmergencyStopRequest(secrets.token_urlsafe(16), drone, kind,
-                                   self.clock() + window, window)  # fmt: skip
+        req = EmergencyStopRequest(
+            secrets.token_urlsafe(16), drone, kind, self.clock() + window, window
+        )
         with self._lock:
             now = self.clock()
             self._estops = {t: r for t, r in self._estops.items() if r.expires_at > now}
@@ -190,8 +209,9 @@ class SafetyGate:
         with self._lock:
             req = self._estops.get(token)
             if req is not None and drone is not None and req.drone != drone:
-                raise EmergencyStopError(f"emergency-stop token was issued for {req.drone!r}, "
-                                         f"not {drone!r}")  # fmt: skip
+                raise EmergencyStopError(
+                    f"emergency-stop token was issued for {req.drone!r}, not {drone!r}"
+                )
             self._estops.pop(token, None)
         if req is None:
             raise EmergencyStopError("unknown or already used emergency-stop token")

@@ -11,6 +11,7 @@ project's model of PX4's documented behaviour, not PX4 itself.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import random
 import select
@@ -158,10 +159,9 @@ class SimVehicle:
         targets = {self.out_addr, *self.extra_addrs}
         targets |= {a for a, p in self.peers.items() if now - p.last_heard < 10.0}
         for addr in targets:
-            try:
+            # nobody listening yet (ICMP port unreachable): like SITL, keep going
+            with contextlib.suppress(OSError):
                 self.sock.sendto(buf, addr)
-            except OSError:
-                pass  # nobody listening yet (ICMP port unreachable): like SITL, keep going
 
     def _receive(self) -> None:
         while True:
@@ -329,11 +329,29 @@ class SimVehicle:
         if target not in (None, 0, self.cfg.sysid):
             return
         if kind == "COMMAND_LONG":
-            self._command(msg.command, [msg.param1, msg.param2, msg.param3, msg.param4,
-                                        msg.param5, msg.param6, msg.param7], msg)
+            self._command(
+                msg.command,
+                [
+                    msg.param1,
+                    msg.param2,
+                    msg.param3,
+                    msg.param4,
+                    msg.param5,
+                    msg.param6,
+                    msg.param7,
+                ],
+                msg,
+            )
         elif kind == "COMMAND_INT":
-            params = [msg.param1, msg.param2, msg.param3, msg.param4,
-                      msg.x / 1e7, msg.y / 1e7, msg.z]  # fmt: skip
+            params = [
+                msg.param1,
+                msg.param2,
+                msg.param3,
+                msg.param4,
+                msg.x / 1e7,
+                msg.y / 1e7,
+                msg.z,
+            ]
             self._command(msg.command, params, msg)
         elif kind == "SET_MODE":
             name = self._decode_set_mode(msg.base_mode, msg.custom_mode)
@@ -387,8 +405,11 @@ class SimVehicle:
                 result = mavlink.MAV_RESULT_DENIED
         elif cmd == mavlink.MAV_CMD_REQUEST_MESSAGE:
             msg_id = int(p[0])
-            result = mavlink.MAV_RESULT_ACCEPTED if self._send_one(msg_id) else (
-                mavlink.MAV_RESULT_DENIED)  # fmt: skip
+            result = (
+                mavlink.MAV_RESULT_ACCEPTED
+                if self._send_one(msg_id)
+                else (mavlink.MAV_RESULT_DENIED)
+            )
         self._ack(cmd, result, msg)
 
     def _change_speed(self, speed_type: int, speed: float) -> int:
@@ -547,11 +568,11 @@ class SimVehicle:
             self.yaw_target = None
 
     def _ground_contact(self, now: float) -> None:
-        if self.landed == mavlink.MAV_LANDED_STATE_TAKEOFF and self.target is not None:
-            if abs(self.pos[2] - self.target[2]) < 0.1:
-                self.landed = mavlink.MAV_LANDED_STATE_IN_AIR
-                if self.px4 and self.mode == "TAKEOFF":
-                    self.mode = "LOITER"
+        taking_off = self.landed == mavlink.MAV_LANDED_STATE_TAKEOFF
+        if taking_off and self.target is not None and abs(self.pos[2] - self.target[2]) < 0.1:
+            self.landed = mavlink.MAV_LANDED_STATE_IN_AIR
+            if self.px4 and self.mode == "TAKEOFF":
+                self.mode = "LOITER"
         if self.pos[2] >= 0.0:
             self.pos[2] = 0.0
             self.vel[2] = min(self.vel[2], 0.0)
@@ -621,8 +642,21 @@ class SimVehicle:
             volts = 14.0 + 2.8 * frac
             amps = (15.0 + 2.0 * math.hypot(vx, vy, vz)) if self.armed else 0.5
             sensors = 0x3FFF
-            m.sys_status_send(sensors, sensors, sensors, 250, int(volts * 1000),
-                              int(amps * 100), int(round(self.battery)), 0, 0, 0, 0, 0, 0)  # fmt: skip
+            m.sys_status_send(
+                sensors,
+                sensors,
+                sensors,
+                250,
+                int(volts * 1000),
+                int(amps * 100),
+                round(self.battery),
+                0,
+                0,
+                0,
+                0,
+                0,
+                0,
+            )
         elif msg_id == mavlink.MAVLINK_MSG_ID_ATTITUDE:
             c, s = math.cos(self.yaw), math.sin(self.yaw)
             fwd = c * self.acc[0] + s * self.acc[1]
@@ -635,9 +669,17 @@ class SimVehicle:
         elif msg_id == mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT:
             lat, lon, alt = self.global_position()
             hdg = int(math.degrees(self.yaw) % 360 * 100)
-            m.global_position_int_send(t, int(lat * 1e7), int(lon * 1e7), int(alt * 1000),
-                                       int(-z * 1000), int(vx * 100), int(vy * 100),
-                                       int(vz * 100), hdg)  # fmt: skip
+            m.global_position_int_send(
+                t,
+                int(lat * 1e7),
+                int(lon * 1e7),
+                int(alt * 1000),
+                int(-z * 1000),
+                int(vx * 100),
+                int(vy * 100),
+                int(vz * 100),
+                hdg,
+            )
         elif msg_id == mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE:
             m.extended_sys_state_send(mavlink.MAV_VTOL_STATE_UNDEFINED, self.landed)
         elif msg_id == mavlink.MAVLINK_MSG_ID_POSITION_TARGET_LOCAL_NED:
@@ -645,16 +687,18 @@ class SimVehicle:
                 return True
             tx, ty, tz = self.target
             mask = 0b110111111000
-            m.position_target_local_ned_send(t, mavlink.MAV_FRAME_LOCAL_NED, mask, tx, ty, tz,
-                                             0, 0, 0, 0, 0, 0, self.yaw, 0)  # fmt: skip
+            m.position_target_local_ned_send(
+                t, mavlink.MAV_FRAME_LOCAL_NED, mask, tx, ty, tz, 0, 0, 0, 0, 0, 0, self.yaw, 0
+            )
         elif msg_id == mavlink.MAVLINK_MSG_ID_VFR_HUD:
             hdg = int(math.degrees(self.yaw) % 360)
             throttle = 50 if self.motors_on else 0
             m.vfr_hud_send(math.hypot(vx, vy), math.hypot(vx, vy), hdg, throttle, -z, -vz)
         elif msg_id == mavlink.MAVLINK_MSG_ID_HOME_POSITION:
             lat, lon, alt = self.cfg.home
-            m.home_position_send(int(lat * 1e7), int(lon * 1e7), int(alt * 1000), 0, 0, 0,
-                                 [1, 0, 0, 0], 0, 0, 0)  # fmt: skip
+            m.home_position_send(
+                int(lat * 1e7), int(lon * 1e7), int(alt * 1000), 0, 0, 0, [1, 0, 0, 0], 0, 0, 0
+            )
         else:
             return False
         return True

@@ -47,7 +47,7 @@ def recognize(
     from proxima.engine.runner import Engine
     from proxima.events import CommandEvent, EventBus
 
-    console = Console(stderr=True)
+    console = Console(stderr=True, soft_wrap=True)
     overrides = {"threshold": threshold, "debounce_s": debounce_s, "idle_disarm_s": idle_disarm_s}
     try:
         control = ControlSettings(**{k: v for k, v in overrides.items() if v is not None})
@@ -63,8 +63,9 @@ def recognize(
     bus = EventBus()
     commands: list[CommandEvent] = []
     bus.add_listener(lambda e: commands.append(e) if isinstance(e, CommandEvent) else None)
-    engine = Engine([spec], bus, control=control, settings=settings, realtime=realtime,
-                    checkpoint=checkpoint)  # fmt: skip
+    engine = Engine(
+        [spec], bus, control=control, settings=settings, realtime=realtime, checkpoint=checkpoint
+    )
     try:
         writer = JsonlWriter(events, bus)
     except OSError as exc:
@@ -150,7 +151,7 @@ def stitch(
     from proxima.gesture.data_source import resolve_dataset
     from proxima.gesture.laser import load_laser_dir
 
-    console = Console(stderr=True)
+    console = Console(stderr=True, soft_wrap=True)
     views = view or ["f"]
     try:
         if bool(script) == bool(random_segments):

@@ -74,13 +74,14 @@ class TimeOrderedMerge:
         with self._lock:
             self._drain(force=True)
 
-    def _blocks(self, stream: str, t: float, now: float) -> bool:
+    def _blocks(self, stream: str, t: float, rank: int, now: float) -> bool:
+        """Whether `stream` may still submit an update that goes before (t, rank)."""
         if self._pending[stream] or stream in self._ended:
             return False
         if stream in self._live and now - self._last_wall[stream] > self.stale_after_s:
             return False
         last = self._last_t[stream]
-        return last is None or last < t
+        return last is None or last < t or (last == t and self.streams.index(stream) < rank)
 
     def _drain(self, force: bool) -> None:
         now = self._clock()
@@ -94,7 +95,7 @@ class TimeOrderedMerge:
             if best is None:
                 return
             if not force and any(
-                self._blocks(s, best[0], now) for s in self.streams if s != best_stream
+                self._blocks(s, best[0], best[1], now) for s in self.streams if s != best_stream
             ):
                 return
             update = self._pending[best_stream].popleft()

@@ -313,6 +313,7 @@ def parse_blank(text: str, kind: str) -> Blank:
     """
     start, _sep, end = text.partition(":")
     try:
-        return Blank(float(start), float(end), kind)
+        times = float(start), float(end)
     except ValueError:
         raise StitchError(f"blank {text!r}: expected START:END in seconds") from None
+    return Blank(*times, kind)

@@ -111,6 +111,50 @@ def evaluate(
     )
 
 
+def protocols(
+    json_out: Annotated[Path, typer.Option("--json", help="Where to write the results.")],
+    data: DataOpt = None,
+    split: Annotated[
+        list[str] | None, typer.Option("--split", help="Repeatable; default: all protocols.")
+    ] = None,
+    eval_data: Annotated[
+        list[str] | None,
+        typer.Option(help="Score temporal/cross-view on this data only (e.g. laser)."),
+    ] = None,
+    model: str = "tcn",
+    epochs: int = 60,
+    stride: int = 3,
+    seed: int = 0,
+    threads: int = 2,
+) -> None:
+    """Train and score a model on each evaluation protocol; print the results table."""
+    from rich.progress import Progress
+
+    from proxima.gesture.protocols import (
+        LASER_PROTOCOLS,
+        UAV_PROTOCOLS,
+        results_table,
+        run_protocols,
+        save_results,
+    )
+    from proxima.gesture.train import TrainConfig
+
+    splits = split or [*LASER_PROTOCOLS, *UAV_PROTOCOLS]
+    cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads)
+    with Progress() as progress:
+        task = progress.add_task("protocols", total=len(splits))
+
+        def done(row: dict) -> None:
+            progress.console.print(
+                f"{row['split']}: accuracy {row['accuracy']:.3f}, clip {row['clip_accuracy']:.3f}"
+            )
+            progress.advance(task)
+
+        rows = run_protocols(splits, model, data, cfg, eval_data, done)
+    save_results(rows, json_out)
+    typer.echo(results_table(rows))
+
+
 def fetch(
     name: Annotated[str, typer.Argument(help="laser or uav-gesture")] = "laser",
     dest: Annotated[Path | None, typer.Option(help="Folder (default: the user cache).")] = None,
@@ -131,6 +175,7 @@ def fetch(
 def register(app: typer.Typer) -> None:
     app.command()(train)
     app.command()(evaluate)
+    app.command()(protocols)
     data_app = typer.Typer(help="Data sets: fetch them for offline use.", no_args_is_help=True)
     data_app.command()(fetch)
     app.add_typer(data_app, name="data")

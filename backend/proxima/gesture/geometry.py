@@ -50,10 +50,11 @@ def hip_centre(xyz: np.ndarray) -> np.ndarray:
 
 
 def torso_length(xyz: np.ndarray) -> np.ndarray:
-    """(..., T, 33, 3) -> (..., 1, 1, 1): median over the window of the 2D distance from
-    the hips' midpoint to the shoulders' midpoint (stable under yaw, unlike width)."""
-    sh = (xyz[..., L_SHOULDER, :2] + xyz[..., R_SHOULDER, :2]) / 2
-    hp = (xyz[..., L_HIP, :2] + xyz[..., R_HIP, :2]) / 2
+    """(..., T, 33, 3) -> (..., 1, 1, 1): median over the window of the distance from the
+    hips' midpoint to the shoulders' midpoint (unchanged by any turn of the camera,
+    unlike the shoulder width)."""
+    sh = (xyz[..., L_SHOULDER, :] + xyz[..., R_SHOULDER, :]) / 2
+    hp = (xyz[..., L_HIP, :] + xyz[..., R_HIP, :]) / 2
     length = np.linalg.norm(sh - hp, axis=-1)  # (..., T)
     return np.maximum(np.median(length, axis=-1), 1e-3)[..., None, None, None]
 

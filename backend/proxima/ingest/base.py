@@ -110,6 +110,7 @@ class FrameSource(ABC):
         with self._state_lock:
             previous = self._state
             if state == previous:
+                self._detail = detail or self._detail  # same state, newer reason
                 return False
             if state not in ALLOWED_TRANSITIONS[previous]:
                 raise InvalidTransition(f"{self.uri}: {previous} -> {state} is not allowed")

@@ -117,6 +117,17 @@ class LiveSource(FrameSource):
             return None, f"{self.uri}: OpenCV error: {exc}"
         return cap, ""
 
+    def _give_up_reason(
+        self, why: str, failures: int, ever_live: bool, lost_since: float | None
+    ) -> str | None:
+        """Why to stop retrying now, or None to go on (see `ReconnectPolicy`)."""
+        if not ever_live and failures >= self.policy.connect_attempts:
+            return f"{why} (gave up after {failures} attempts)"
+        limit = self.policy.give_up_after_s
+        if lost_since is not None and limit is not None and time.monotonic() - lost_since > limit:
+            return f"{why} (gave up after {limit:g} s)"
+        return None
+
     def _run(self) -> None:
         first_wall: float | None = None
         lost_since: float | None = None  # wall time the stream was last lost
@@ -125,50 +136,39 @@ class LiveSource(FrameSource):
         try:
             while not self._stop.is_set():
                 cap, why = self._try_open()
-                if cap is None:
-                    failures += 1
-                    if first_wall is None and failures >= self.policy.connect_attempts:
-                        self._end(f"{why} (gave up after {failures} attempts)")
-                        return
-                    if (
-                        lost_since is not None
-                        and self.policy.give_up_after_s is not None
-                        and time.monotonic() - lost_since > self.policy.give_up_after_s
-                    ):
-                        self._end(f"{why} (gave up after {self.policy.give_up_after_s:g} s)")
-                        return
-                    self._advance(StreamState.RECONNECTING, why)
-                    self._stop.wait(self.policy.delay(failures))
-                    continue
-                try:
-                    while not self._stop.is_set():
-                        ok, image = cap.read()
-                        if not ok or image is None:
-                            break
-                        now = time.monotonic()
-                        if first_wall is None:
-                            first_wall = now
-                        self._publish(image, index, now - first_wall, now)
-                        index += 1
-                        failures = 0
-                        lost_since = None
-                        if self._state != StreamState.LIVE:
-                            self._advance(StreamState.LIVE)
-                finally:
-                    cap.release()
-                if self._stop.is_set():
-                    break
-                # The capture failed: the server dropped, the camera went away, or no
-                # frame came within the read timeout.
-                self.reconnects += 1
+                if cap is not None:
+                    try:
+                        while not self._stop.is_set():
+                            ok, image = cap.read()
+                            if not ok or image is None:
+                                break
+                            now = time.monotonic()
+                            if first_wall is None:
+                                first_wall = now
+                            self._publish(image, index, now - first_wall, now)
+                            index += 1
+                            failures = 0
+                            lost_since = None
+                            if self._state != StreamState.LIVE:
+                                self._advance(StreamState.LIVE)
+                    finally:
+                        cap.release()
+                    if self._stop.is_set():
+                        break
+                    # The server dropped, the camera went away, or no frame came within
+                    # the read timeout.
+                    self.reconnects += 1
+                    why = f"{self.uri}: stream dropped" if first_wall else f"{self.uri}: no frame"
+                failures += 1
                 lost_since = lost_since or time.monotonic()
-                if first_wall is None:
-                    failures += 1
-                    if failures >= self.policy.connect_attempts:
-                        self._end(f"{self.uri}: opened but delivered no frame")
-                        return
-                self._advance(StreamState.RECONNECTING, f"{self.uri}: stream dropped")
-                self._stop.wait(self.policy.delay(max(failures, 1)))
+                reason = self._give_up_reason(why, failures, first_wall is not None, lost_since)
+                if reason is not None:
+                    self._end(reason)
+                    return
+                self._advance(StreamState.RECONNECTING, why)
+                self._stop.wait(self.policy.delay(failures))
+        except Exception as exc:  # a bug here must end this stream visibly, not silently
+            self._end(f"{self.uri}: reader failed: {exc!r}")
         finally:
             self._end()
             with self._cond:

@@ -6,17 +6,23 @@ once; later failures (unplugged) show as `reconnecting` like any live source.
 
 from __future__ import annotations
 
+import threading
+
 import cv2
 
 from proxima.ingest.base import SourceError, StateListener
 from proxima.ingest.live import LiveSource, ReconnectPolicy
+
+_in_use: set[int] = set()  # camera numbers held by an open source (one reader each)
+_in_use_lock = threading.Lock()
 
 
 class WebcamSource(LiveSource):
     """Frames of camera `index`; `t` is seconds since the first frame (wall clock).
 
     Raises:
-        SourceError: (from the constructor) the camera cannot be opened.
+        SourceError: (from the constructor) the camera cannot be opened, or another
+            open source already reads it (one reader thread per device).
     """
 
     def __init__(
@@ -37,7 +43,22 @@ class WebcamSource(LiveSource):
             on_state=on_state,
         )
         self.index = index
-        self._probed: cv2.VideoCapture | None = self._open_capture()
+        with _in_use_lock:
+            if index in _in_use:
+                raise SourceError(f"{uri}: camera {index} is already open in another source")
+            _in_use.add(index)
+        self._holds_device = True
+        try:
+            self._probed: cv2.VideoCapture | None = self._open_capture()
+        except BaseException:
+            self._release_device()
+            raise
+
+    def _release_device(self) -> None:
+        with _in_use_lock:
+            if getattr(self, "_holds_device", False):
+                _in_use.discard(self.index)
+                self._holds_device = False
 
     def _open_capture(self) -> cv2.VideoCapture:
         probed, self._probed = getattr(self, "_probed", None), None
@@ -54,3 +75,4 @@ class WebcamSource(LiveSource):
         if probed is not None:
             probed.release()
         super().close()
+        self._release_device()

@@ -45,8 +45,7 @@ class CommandRecord(Base):
     outcome: Mapped[str | None] = mapped_column(String(32), nullable=True)
     sent_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
     acked_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
-    completed_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True),
-                                                          nullable=True)  # fmt: skip
+    completed_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {}
@@ -70,7 +69,9 @@ class CommandLog:
         self.engine = (
             engine_or_path if isinstance(engine_or_path, Engine) else make_engine(engine_or_path)
         )
-        Base.metadata.create_all(self.engine, tables=[CommandRecord.__table__])
+        Base.metadata.create_all(
+            self.engine, tables=[Base.metadata.tables[CommandRecord.__tablename__]]
+        )
         self._session = make_sessionmaker(self.engine)
         self._lock = threading.Lock()
 

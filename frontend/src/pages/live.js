@@ -111,7 +111,11 @@ function renderSide() {
       }
       const battery = st.battery_pct != null ? `${Math.round(st.battery_pct)}%` : "—";
       card.append(
-        el("div", { text: [st.mode, st.armed ? "motors armed" : "motors disarmed", st.landed].filter(Boolean).join(" · ") }),
+        el("div", {
+          text: st.link
+            ? [st.mode, st.armed ? "motors armed" : "motors disarmed", st.landed].filter(Boolean).join(" · ")
+            : "no telemetry yet",
+        }),
         el("div", { text: `NED ${pos} m · battery ${battery}` }),
       );
       return card;
@@ -121,15 +125,16 @@ function renderSide() {
   log.replaceChildren(
     ...state.commands.slice(0, 60).map((c) => {
       const r = c.result;
-      const outcome = r ? [r.status, r.ack, r.outcome, r.reason].filter(Boolean).join(" · ") : "";
+      const outcome = r ? [r.status, r.ack, r.outcome].filter(Boolean).join(" · ") : "decided";
+      const when = typeof c.ts === "number" ? new Date(c.ts * 1000).toLocaleTimeString() : "";
       return el(
         "tr",
-        { class: r && r.status === "refused" ? "refused" : "" },
-        el("td", { text: typeof c.t === "number" ? c.t.toFixed(1) : "" }),
+        { class: r ? `st-${r.status}` : "" },
+        el("td", { text: when }),
         el("td", { text: c.drone || "" }),
-        el("td", { text: c.command || "" }),
-        el("td", { text: c.stream || "" }),
-        el("td", { text: outcome }),
+        el("td", { class: "cmd", text: c.command || "" }),
+        el("td", { text: c.stream || (r && r.status ? "console" : "") }),
+        el("td", { class: "outcome", text: outcome, title: (r && r.reason) || "" }),
       );
     }),
   );
@@ -193,7 +198,7 @@ export function mount(container) {
       el(
         "table",
         { class: "command-log" },
-        el("thead", {}, el("tr", {}, ...["t (s)", "drone", "command", "seen by", "outcome"].map((h) => el("th", { text: h })))),
+        el("thead", {}, el("tr", {}, ...["time", "drone", "command", "seen by", "outcome"].map((h) => el("th", { text: h })))),
         el("tbody"),
       ),
     ),

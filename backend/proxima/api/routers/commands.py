@@ -1,4 +1,6 @@
-"""The command log: every command decided for a drone, newest first."""
+"""The command log. `GET /commands`: the durable log every drone command is written to
+(with its acknowledgement and outcome); `GET /commands/live`: the commands the engine
+decided since this server started, as seen on the bus (also when no drone is linked)."""
 
 from __future__ import annotations
 
@@ -12,7 +14,19 @@ router = APIRouter(prefix="/commands", tags=["commands"])
 
 
 @router.get("")
-def list_commands(
+def command_log(
+    _: CurrentUser,
+    console: ConsoleDep,
+    drone: str | None = None,
+    limit: Annotated[int, Query(ge=1, le=1000)] = 100,
+) -> list[dict[str, Any]]:
+    from proxima.store.command_log import CommandLog
+
+    return CommandLog(console.db_engine).recent(limit=limit, drone=drone)
+
+
+@router.get("/live")
+def live_commands(
     _: CurrentUser,
     console: ConsoleDep,
     drone: str | None = None,

@@ -1,0 +1,170 @@
+"""Assembling a running console from settings: the event bus, the live engine for the
+configured streams, the drone links and their controller, the 3D view and the web app.
+
+Each part is built only when its settings ask for it (streams, drones, viser); a part
+that cannot start is reported in `notes` and its routes answer 503 — the console never
+pretends. `proxima serve` and the demo use this.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Any
+
+from fastapi import FastAPI
+from sqlalchemy import Engine
+
+from proxima.api.app import create_app, open_database
+from proxima.events import EventBus
+from proxima.settings import Settings
+
+log = logging.getLogger(__name__)
+
+
+def control_settings(settings: Settings) -> Any:
+    """The engine's ControlSettings with the overrides set in `settings.recognition`."""
+    from proxima.control import ControlSettings
+
+    r = settings.recognition
+    names = {
+        "filter_window": "filter_size",
+        "threshold": "threshold",
+        "debounce_s": "debounce_s",
+        "arming_timeout_s": "idle_disarm_s",
+        "handover_hold_s": "hold_s",
+    }
+    overrides = {
+        theirs: getattr(r, ours) for ours, theirs in names.items() if getattr(r, ours) is not None
+    }
+    return ControlSettings(**overrides)
+
+
+@dataclass
+class ConsoleRuntime:
+    """Every running part of one console process; `close()` stops them in order."""
+
+    settings: Settings
+    bus: EventBus
+    app: FastAPI
+    engine: Any = None  # proxima.engine.Engine
+    drones: Any = None  # proxima.drone.controller.DroneController
+    links: dict[str, Any] = field(default_factory=dict)
+    view: Any = None  # proxima.viz.scene.FleetView
+    notes: list[str] = field(default_factory=list)
+
+    def close(self) -> None:
+        if self.engine is not None:
+            self.engine.stop()
+        if self.drones is not None:
+            self.drones.close()
+        for link in self.links.values():
+            link.close()
+        if self.view is not None:
+            self.view.stop()
+
+
+def _start_engine(settings: Settings, bus: EventBus, realtime: bool) -> Any:
+    from proxima.engine import Engine, EngineSettings, StreamSpec
+
+    specs = [
+        StreamSpec(name=s.name, uri=s.uri, drone=s.drone)
+        for s in sorted(settings.streams, key=lambda s: (s.priority, s.name))
+    ]
+    engine_settings = (
+        EngineSettings(stride=settings.recognition.stride)
+        if settings.recognition.stride is not None
+        else EngineSettings()
+    )
+    engine = Engine(
+        specs,
+        bus,
+        control=control_settings(settings),
+        settings=engine_settings,
+        realtime=realtime,
+        checkpoint=settings.recognition.checkpoint,
+    )
+    return engine.start()
+
+
+def _start_drones(settings: Settings, bus: EventBus, db: Engine, rt: ConsoleRuntime) -> Any:
+    from proxima.drone.controller import DroneController, EmergencyStopService
+    from proxima.drone.mavlink_link import MavlinkLink
+    from proxima.drone.safety import SafetyConfig
+    from proxima.store.command_log import CommandLog
+
+    for d in settings.drones:
+        link = MavlinkLink(d.connection, d.name, bus=bus)
+        rt.links[d.name] = link
+        try:
+            link.connect(timeout=10.0)
+        except Exception as exc:  # the link keeps trying; its state shows "connecting"
+            rt.notes.append(f"drone {d.name}: {exc}")
+    controller = DroneController(
+        rt.links, safety=SafetyConfig.from_settings(settings), log=CommandLog(db), bus=bus
+    )
+    controller.attach(bus)
+    rt.drones = controller
+    return EmergencyStopService(controller)
+
+
+def build_runtime(
+    settings: Settings,
+    *,
+    bus: EventBus | None = None,
+    engine: bool = True,
+    drones: bool = True,
+    view: bool | None = None,
+    realtime: bool = True,
+    training: Any = None,
+) -> ConsoleRuntime:
+    """Start every configured part and build the app (serve it with uvicorn).
+
+    Raises:
+        sqlalchemy.exc.SQLAlchemyError: the database cannot be opened or migrated.
+    """
+    bus = bus or EventBus()
+    db = open_database(settings)  # first: every other part writes to it
+    rt = ConsoleRuntime(settings=settings, bus=bus, app=FastAPI())
+    estop = None
+    if drones and settings.drones:
+        try:
+            estop = _start_drones(settings, bus, db, rt)
+        except Exception as exc:
+            rt.notes.append(f"drone links not started: {type(exc).__name__}: {exc}")
+    elif not settings.drones:
+        rt.notes.append("no drones configured: emergency stop unavailable")
+
+    promoter = None
+    if engine and settings.streams:
+        try:
+            rt.engine = _start_engine(settings, bus, realtime)
+            from proxima.api.promote import EnginePromoter
+
+            promoter = EnginePromoter(rt.engine, settings.recognition.checkpoint)
+        except Exception as exc:
+            rt.notes.append(f"live engine not started: {type(exc).__name__}: {exc}")
+    elif not settings.streams:
+        rt.notes.append("no streams configured: the Live page stays empty")
+
+    if view if view is not None else settings.server.viser_enabled:
+        try:
+            from proxima.viz.scene import FleetView
+
+            rt.view = FleetView(settings, bus).start()
+        except Exception as exc:
+            rt.notes.append(f"3D view not started: {type(exc).__name__}: {exc}")
+
+    if training is None:
+        rt.notes.append("no federated training runner: runs cannot be started")
+
+    rt.app = create_app(
+        settings,
+        bus,
+        training=training,
+        estop=estop,
+        promoter=promoter,
+        viz_port=rt.view.port if rt.view else None,
+        db_engine=db,
+    )
+    return rt

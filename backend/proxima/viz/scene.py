@@ -1,0 +1,182 @@
+"""The viser server and its scene: geofence cylinder, ground grid, the operator, one
+sphere and trail per drone (the driving drone larger and amber, a lost link red).
+
+The server listens on 127.0.0.1 by default (its own port); a thread reads the bus and
+redraws at most `view.update_hz` times a second, so the bus never waits on viser.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import numpy as np
+
+from proxima.events import EventBus
+from proxima.settings import Settings
+from proxima.viz.model import SceneModel
+
+COLORS = {
+    "driving": (240, 180, 41),
+    "idle": (88, 166, 255),
+    "lost": (248, 81, 73),
+    "trail": (160, 160, 160),
+    "operator": (30, 30, 30),
+    "operator_lost": (170, 170, 170),
+    "fence": (248, 81, 73),
+}
+VIZ_TYPES = ("drone_state", "handover", "pose")
+
+
+def geofence_segments(
+    radius: float, min_alt: float, max_alt: float, sides: int = 72, posts: int = 12
+) -> np.ndarray:
+    """The geofence cylinder as (N, 2, 3) line segments: a ring at the lowest and the
+    highest allowed altitude and vertical posts between them. Lines keep the scene
+    inside the fence readable, where a shaded cylinder would veil it."""
+    a = np.linspace(0.0, 2 * np.pi, sides + 1)
+    ring = np.stack([radius * np.cos(a), radius * np.sin(a)], axis=1)
+    segs = []
+    for z in (min_alt, max_alt):
+        pts = np.column_stack([ring, np.full(len(ring), z)])
+        segs.append(np.stack([pts[:-1], pts[1:]], axis=1))
+    b = np.linspace(0.0, 2 * np.pi, posts, endpoint=False)
+    foot = np.stack([radius * np.cos(b), radius * np.sin(b)], axis=1)
+    lo = np.column_stack([foot, np.full(posts, min_alt)])
+    hi = np.column_stack([foot, np.full(posts, max_alt)])
+    segs.append(np.stack([lo, hi], axis=1))
+    return np.concatenate(segs).astype(np.float32)
+
+
+class FleetView:
+    """A running viser scene fed by `bus`. `start()` opens the port; `stop()` closes it."""
+
+    def __init__(self, settings: Settings, bus: EventBus, port: int | None = None) -> None:
+        self.settings = settings
+        self.bus = bus
+        self.model = SceneModel(settings)
+        self.host = settings.server.viser_host
+        self.port = settings.server.viser_port if port is None else port
+        self.server: Any = None
+        self._handles: dict[str, Any] = {}
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._sub: Any = None
+        self._drawn_version = -1
+
+    def start(self) -> FleetView:
+        """Start viser and the drawing thread.
+
+        Raises:
+            OSError: the port is taken.
+        """
+        import viser
+
+        self.server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
+        self.port = self.server.get_port()
+        self._static_scene()
+        self._sub = self.bus.subscribe(maxsize=2000, types=VIZ_TYPES)
+        self._thread = threading.Thread(target=self._run, name="viz", daemon=True)
+        self._thread.start()
+        return self
+
+    def _static_scene(self) -> None:
+        scene = self.server.scene
+        fence = self.settings.safety.geofence
+        scene.set_up_direction("+z")
+        # Stand a little behind and beside the operator, looking at where drones fly.
+        ox, oy = self.settings.view.operator_position
+        self.server.initial_camera.position = (ox + 6.0, oy - 14.0, 7.0)
+        self.server.initial_camera.look_at = (ox, oy - 3.0, 2.0)
+        scene.add_grid(
+            "/ground",
+            width=2 * fence.radius_m,
+            height=2 * fence.radius_m,
+            cell_size=1.0,
+            section_size=5.0,
+        )
+        scene.add_line_segments(
+            "/geofence",
+            geofence_segments(fence.radius_m, fence.min_alt_m, fence.max_alt_m),
+            colors=COLORS["fence"],
+            thickness=2.0,
+            thickness_units="screen",
+        )
+        scene.add_label(
+            "/geofence/label",
+            f"geofence r={fence.radius_m:g} m",
+            position=(fence.radius_m, 0.0, fence.max_alt_m / 2),
+        )
+        base = self.model.operator_base
+        scene.add_label("/operator/label", "operator", position=(base[0], base[1], 2.0))
+
+    def _run(self) -> None:
+        period = 1.0 / self.settings.view.update_hz
+        while not self._stop.is_set():
+            event = self._sub.get(timeout=period)
+            if event is not None:
+                self.model.apply(event)
+                for e in self._sub.drain():
+                    self.model.apply(e)
+            if self.model.version != self._drawn_version:
+                self.draw()
+                self._stop.wait(period)
+
+    def draw(self) -> None:
+        """Push the model's current state to every browser viewing the scene."""
+        snap = self.model.snapshot()
+        self._drawn_version = snap["version"]
+        scene = self.server.scene
+        for name, d in snap["drones"].items():
+            driving = name == snap["driving_drone"]
+            color = (
+                COLORS["lost"]
+                if d["link"] == "lost"
+                else (COLORS["driving"] if driving else COLORS["idle"])
+            )
+            pos = d["position"] if d["position"] is not None else d["home"]
+            key = f"/drones/{name}"
+            sphere = self._handles.get(key)
+            if sphere is None:
+                sphere = scene.add_icosphere(
+                    key, radius=0.5, color=color, position=tuple(pos), cast_shadow=False
+                )
+                self._handles[key] = sphere
+                self._handles[key + "/label"] = scene.add_label(
+                    key + "/label", name, position=(0.0, 0.0, 0.6)
+                )
+            sphere.position = tuple(float(v) for v in pos)
+            sphere.color = color
+            sphere.scale = 1.6 if driving else 1.0
+            trail = d["trail"]
+            if len(trail) >= 2:
+                segs = np.stack([trail[:-1], trail[1:]], axis=1).astype(np.float32)
+                tkey = f"/trails/{name}"
+                handle = self._handles.get(tkey)
+                if handle is not None:
+                    handle.remove()
+                self._handles[tkey] = scene.add_line_segments(
+                    tkey,
+                    segs,
+                    colors=color if driving else COLORS["trail"],
+                    thickness=3.0,
+                    thickness_units="screen",
+                )
+        op = snap["operator"]
+        if op is not None:
+            handle = self._handles.get("/operator/body")
+            if handle is not None:
+                handle.remove()
+            color = COLORS["operator"] if snap["operator_visible"] else COLORS["operator_lost"]
+            self._handles["/operator/body"] = scene.add_line_segments(
+                "/operator/body", op, colors=color, thickness=4.0, thickness_units="screen"
+            )
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(5.0)
+        if self._sub is not None:
+            self._sub.close()
+        if self.server is not None:
+            self.server.stop()

@@ -1,0 +1,52 @@
+"""JPEG thumbnails of camera frames: real photo in, small JPEG out, at a modest rate."""
+
+from __future__ import annotations
+
+import base64
+import time
+
+import cv2
+import numpy as np
+from matplotlib import cbook
+from proxima.api.thumbnails import ThumbnailTap
+from proxima.events import EventBus
+from proxima.types import Frame
+
+
+def _photo() -> np.ndarray:
+    path = cbook.get_sample_data("grace_hopper.jpg", asfileobj=False)
+    image = cv2.imread(str(path))
+    assert image is not None
+    return image
+
+
+def test_thumbnail_is_a_small_jpeg_of_the_frame() -> None:
+    bus = EventBus()
+    image = _photo()
+    tap = ThumbnailTap(bus, "cam", hz=1000.0, width=160)
+    with bus.subscribe(types=["thumbnail"]) as sub:
+        assert tap.offer(Frame(t=0.5, index=0, image=image))
+        event = sub.get(timeout=1)
+    assert event is not None and event.stream == "cam" and event.t == 0.5
+    jpeg = base64.b64decode(event.jpeg_b64)
+    decoded = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+    h, w = image.shape[:2]
+    assert decoded.shape == (round(h * 160 / w), 160, 3) == (event.height, event.width, 3)
+    # It is the same picture, shrunk: compare with a plain resize.
+    small = cv2.resize(image, (160, decoded.shape[0]), interpolation=cv2.INTER_AREA)
+    assert np.abs(decoded.astype(int) - small.astype(int)).mean() < 8
+    assert len(jpeg) < 20_000
+
+
+def test_rate_limit_and_replayed_frames() -> None:
+    bus = EventBus()
+    tap = ThumbnailTap(bus, "cam", hz=5.0)
+    image = _photo()
+    sent = 0
+    end = time.monotonic() + 1.0
+    while time.monotonic() < end:
+        sent += tap.offer(Frame(t=0.0, index=0, image=image))
+        time.sleep(0.005)
+    assert 4 <= sent <= 6
+    # A replayed frame has no pixels: no thumbnail.
+    assert not ThumbnailTap(bus, "replay").offer(Frame(t=0.0, index=0, image=None))

@@ -1,0 +1,62 @@
+from __future__ import annotations
+
+import numpy as np
+
+from proxima.gesture.augment import mirror, rotate
+from proxima.gesture.features import BodyPipeline, PaperPipeline
+from proxima.gesture.geometry import rotation_matrix, to_metric
+from proxima.gesture.windows import make_windows
+from proxima.types import GESTURES
+
+
+def _windows(laser_clips, view="f"):
+    clips = [c for c in laser_clips if c.view == view]
+    return make_windows(clips, stride=200)
+
+
+def test_mirroring_swaps_only_left_and_right_moves(laser_clips) -> None:
+    w = _windows(laser_clips)
+    m = to_metric(w.xyz, w.aspect)
+    m2, l2 = mirror(m, w.labels)
+    names = {GESTURES[a]: GESTURES[b] for a, b in zip(w.labels, l2, strict=True)}
+    assert names["move_to_left"] == "move_to_right" and names["move_to_right"] == "move_to_left"
+    assert all(a == b for a, b in names.items() if a not in ("move_to_left", "move_to_right"))
+    m3, l3 = mirror(m2, l2)
+    np.testing.assert_allclose(m3, m, atol=1e-5)  # mirroring twice is the identity
+    assert (l3 == w.labels).all()
+
+
+def test_body_features_do_not_change_when_the_camera_turns(laser_clips) -> None:
+    w = _windows(laser_clips)
+    m = to_metric(w.xyz, w.aspect)
+    turned = m @ rotation_matrix(0, np.deg2rad(50), 0).T  # another view of the same motion
+    body = BodyPipeline()
+    a, b = body.transform(m, w.has_z), body.transform(turned, w.has_z)
+    np.testing.assert_allclose(a, b, atol=1e-3)
+    assert a.shape == (len(w), 60, body.num_features)
+
+
+def test_body_features_are_scale_and_position_free(laser_clips) -> None:
+    w = _windows(laser_clips)
+    m = to_metric(w.xyz, w.aspect)
+    body = BodyPipeline()
+    np.testing.assert_allclose(body.transform(m), body.transform(2.5 * m + 0.3), atol=1e-4)
+
+
+def test_paper_scaling_is_fitted_on_training_data_only(laser_clips) -> None:
+    w = _windows(laser_clips)
+    m = to_metric(w.xyz, w.aspect)
+    p = PaperPipeline().fit(m[:5])
+    x = p.transform(m[:5])
+    assert x.shape == (5, 60, 99) and x.min() >= 0 and x.max() <= 1 + 1e-6
+    restored = PaperPipeline.from_state(p.state())
+    np.testing.assert_allclose(restored.transform(m), p.transform(m), atol=1e-6)
+
+
+def test_rotation_stays_within_range_and_keeps_bone_lengths(laser_clips) -> None:
+    w = _windows(laser_clips)
+    m = to_metric(w.xyz, w.aspect)
+    r = rotate(m, np.random.default_rng(0), 15.0)
+    bone = lambda x: np.linalg.norm(x[..., 13, :] - x[..., 15, :], axis=-1)  # noqa: E731
+    np.testing.assert_allclose(bone(r), bone(m), rtol=1e-4, atol=1e-5)
+    assert not np.allclose(r, m)

@@ -1,0 +1,142 @@
+"""The console with a real simulated vehicle (`proxima sim-drone`, MAVLink over UDP on
+127.0.0.1) flown through the project's link: the 3D view shows it with its trail, and
+the emergency stop asks for confirmation before it lands the drone."""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from proxima.api.feed import ReplayPoseFeed
+from proxima.events import HandoverEvent
+from ui_helpers import Console, laser_clip, login, screenshot, start_console, wait_for
+
+PROXIMA = str(Path(sys.executable).with_name("proxima"))
+
+
+def _free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def flying(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Console]:
+    """A console linked to one simulated drone that took off to 3 m and flew 4 m east,
+    with the operator's pose replayed from the LASER set."""
+    port = _free_udp_port()
+    sim = subprocess.Popen(
+        [
+            PROXIMA,
+            "sim-drone",
+            "--port",
+            str(port),
+            "--max-accel",
+            "8",
+            "--max-climb",
+            "4",
+            "--land-speed",
+            "3",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    uri = f"replay:{laser_clip('move_to_right_f')}@30"
+    console = feed = None
+    try:
+        console = start_console(
+            tmp_path_factory.mktemp("drone"),
+            with_drones=True,
+            with_view=True,
+            streams=[{"name": "front", "uri": uri, "drone": "main"}],
+            drones=[
+                {"name": "main", "connection": f"udpin:127.0.0.1:{port}", "home": (0.0, -6.0, 0.0)}
+            ],
+        )
+        feed = ReplayPoseFeed(console.bus, {"front": uri}).start()
+        console.bus.publish(
+            HandoverEvent(t=0.0, stream="front", from_stream="", to_stream="front", reason="start")
+        )
+        link = console.runtime.links["main"]
+        assert link.enter_guided().ok and link.arm().ok and link.takeoff(3.0).ok
+        wait_for(
+            lambda: (t := link.telemetry()) and t.altitude and t.altitude > 2.5,
+            timeout=20,
+            what="take-off",
+        )
+        assert link.goto_local(0.0, 4.0, -3.0).ok
+        wait_for(lambda: link.telemetry().position[1] > 3.8, timeout=20, what="the move east")
+        yield console
+    finally:
+        if feed is not None:
+            feed.stop()
+        if console is not None:
+            console.close()
+        sim.terminate()
+        try:
+            sim.wait(10)
+        except subprocess.TimeoutExpired:
+            sim.kill()
+            sim.wait()
+
+
+def _emergency_rows(console: Console) -> list[dict]:
+    from proxima.store.command_log import CommandLog
+
+    rows = CommandLog(console.runtime.app.state.console.db_engine).recent(limit=50)
+    return [r for r in rows if r["command"] == "emergency_stop"]
+
+
+def test_3d_view_shows_the_drone(page, flying: Console) -> None:  # type: ignore[no-untyped-def]
+    view = flying.runtime.view
+    assert view is not None and view.host == "127.0.0.1"
+    trail = wait_for(
+        lambda: len(view.model.snapshot()["drones"]["main"]["trail"]) > 10,
+        what="a trail in the 3D model",
+    )
+    assert trail
+    login(page, flying.url)
+    page.click("nav a[data-page='3d']")
+    frame = page.frame_locator("iframe.viser")
+    frame.locator("text=Connected").wait_for(timeout=20000)
+    frame.locator("text=/drones").wait_for()
+    page.wait_for_timeout(1500)  # let WebGL draw the scene
+    screenshot(page, "3d-view")
+
+
+def test_emergency_stop_asks_for_confirmation(page, flying: Console) -> None:  # type: ignore[no-untyped-def]
+    link = flying.runtime.links["main"]
+    login(page, flying.url)
+    page.wait_for_selector(".drone[data-drone=main] .badge.l-ok")
+
+    page.click("#estop-open")
+    page.wait_for_selector("#estop-dialog[open]")
+    page.click("#estop-request")
+    page.wait_for_selector("#estop-step2:not([hidden])")
+    assert "Really stop main?" in page.inner_text("#estop-question")
+    screenshot(page, "emergency-stop-confirm")
+    time.sleep(1.0)
+    # Asking changed nothing: still flying; the log holds only the request, not sent.
+    assert link.telemetry().landed == "in_air" and link.telemetry().altitude > 2.5
+    rows = _emergency_rows(flying)
+    assert [(r["status"], r["sent"]) for r in rows] == [("pending", None)]
+    page.click("#estop-step2 .cancel")
+    assert not page.is_visible("#estop-dialog")
+    time.sleep(0.5)
+    assert link.telemetry().landed == "in_air"
+
+    page.click("#estop-open")
+    page.click("#estop-request")
+    page.click("#estop-confirm")
+    page.wait_for_selector("#estop-result.ok")
+    sent = wait_for(
+        lambda: [r for r in _emergency_rows(flying) if r["status"] == "sent"],
+        what="the logged emergency stop",
+    )
+    assert sent[0]["drone"] == "main" and sent[0]["sent"] is not None
+    wait_for(lambda: link.telemetry().altitude < 0.3, timeout=20, what="the landing")

@@ -1,0 +1,50 @@
+"""Labelling in a real browser: record frames of a replayed LASER stream after a
+countdown, review them as a skeleton playback, keep them with a gesture, find the
+sample listed (and stored for that stream's drone)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from proxima.api.feed import ReplayPoseFeed
+from proxima.store.samples import kept_samples
+from ui_helpers import laser_clip, login, screenshot, start_console
+
+
+def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    uri = f"replay:{laser_clip('land_direction_f')}@30"
+    console = start_console(
+        tmp_path,
+        streams=[{"name": "front", "uri": uri, "drone": "main"}],
+        drones=[{"name": "main", "connection": "udpin:127.0.0.1:14550"}],
+    )
+    feed = ReplayPoseFeed(console.bus, {"front": uri}).start()
+    try:
+        login(page, console.url)
+        page.click("nav a[data-page=labelling]")
+        page.select_option("select.stream", "front")
+        page.fill("input.frames", "45")
+        page.fill("input.countdown", "1.5")
+        page.select_option("select.gesture", "land_direction")
+        page.click("button.record")
+        page.wait_for_selector(".rec-status.countdown")  # the countdown is shown first
+        page.wait_for_selector(".review-box:not([hidden])", timeout=20000)
+        title = page.inner_text(".review-title")
+        assert "45 frames of front for main (pending)" in title
+        # The review canvas plays the recorded skeleton.
+        first = page.get_attribute("canvas.review", "data-frame")
+        page.wait_for_function(
+            "f => document.querySelector('canvas.review').dataset.frame !== f", arg=first
+        )
+        screenshot(page, "labelling")
+        page.click("button.keep")
+        row = page.wait_for_selector("table.samples tbody tr.st-kept")
+        assert row.query_selector(".label").inner_text() == "land_direction"
+        cells = [c.inner_text() for c in row.query_selector_all("td")]
+        assert cells[2:] == ["front", "main", "land_direction", "kept", "45"]
+        with console.runtime.app.state.console.sessions() as db:
+            kept = kept_samples(db, "main")
+        assert [(k.label, k.xyz.shape) for k in kept] == [("land_direction", (45, 33, 3))]
+    finally:
+        feed.stop()
+        console.close()

@@ -1,0 +1,94 @@
+"""The Live page in a real browser, on the real live engine: two streams replayed from
+the LASER set run through recognition with the shipped gesture model; each tile's
+skeleton and raw-gesture label follow the engine's events."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+from ui_helpers import laser_clip, login, screenshot, start_console, wait_for
+
+PIXEL_HASH = """c => {
+  const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+  let h = 0;
+  for (let i = 0; i < d.length; i += 4) h = (h * 31 + d[i] + 3 * d[i + 1] + 7 * d[i + 2]) | 0;
+  return [Number(c.dataset.poseCount), h];
+}"""
+
+
+@pytest.fixture(scope="module")
+def checkpoint() -> Path:
+    from proxima.gesture.classifier import default_checkpoint
+
+    path = Path(os.environ.get("PROXIMA_TEST_CHECKPOINT") or default_checkpoint())
+    assert path.is_file(), f"the live tile test needs the gesture checkpoint at {path}"
+    return path
+
+
+def test_tiles_follow_the_engine(page, tmp_path: Path, checkpoint: Path) -> None:  # type: ignore[no-untyped-def]
+    console = start_console(
+        tmp_path,
+        with_engine=True,
+        streams=[
+            {"name": "front", "uri": f"replay:{laser_clip('move_to_left_f')}@30", "drone": "main"},
+            {
+                "name": "left",
+                "uri": f"replay:{laser_clip('move_to_left_l')}@30",
+                "drone": "second",
+                "priority": 1,
+            },
+        ],
+        drones=[
+            {"name": "main", "connection": "udpin:127.0.0.1:14550"},
+            {"name": "second", "connection": "udpin:127.0.0.1:14560", "sysid": 2},
+        ],
+        recognition={"checkpoint": str(checkpoint)},
+    )
+    assert console.runtime.engine is not None, console.runtime.notes
+    gestures = console.bus.subscribe(types=["gesture"])
+    latest: dict[str, str] = {}
+
+    def newest(stream: str) -> str | None:
+        for e in gestures.drain():
+            latest[e.stream] = e.gesture
+        return latest.get(stream)
+
+    try:
+        login(page, console.url)
+        tile = "article.tile[data-stream=front]"
+        page.wait_for_selector(f"{tile} canvas[data-pose-count]")
+
+        def skeleton() -> tuple[int, int]:
+            """The tile's pose count and a hash of its canvas pixels."""
+            return page.eval_on_selector(f"{tile} canvas", PIXEL_HASH)
+
+        count0, pixels0 = wait_for(lambda: (s := skeleton())[0] > 5 and s, what="poses")
+        page.wait_for_timeout(700)
+        count1, pixels1 = skeleton()
+        assert count1 > count0 + 10, "the skeleton stopped updating"
+        assert pixels1 != pixels0, "the canvas did not redraw"
+
+        # The raw gesture label shows the engine's newest classification of that stream.
+        def label() -> str:
+            return page.inner_text(f"{tile} .value.gesture")
+
+        wait_for(lambda: label() != "—", timeout=20, what="a gesture label")
+        shown = wait_for(
+            lambda: (g := newest("front")) is not None and label().split(" ")[0] == g and g,
+            timeout=10,
+            what="the label to match the engine's newest gesture",
+        )
+        assert shown in console.runtime.engine.pipelines["front"].classifier.labels
+        texts = {label()}
+        wait_for(
+            lambda: texts.add(label()) or len(texts) > 1,
+            timeout=15,
+            what="the label to change with new classifications",
+        )
+        assert page.inner_text(f"{tile} .value.state") == "live"
+        screenshot(page, "live")
+    finally:
+        gestures.close()
+        console.close()
