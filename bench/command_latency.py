@@ -184,12 +184,14 @@ def engine_run(
 
 # -- tuning ---------------------------------------------------------------------------
 GRID = {
-    "stride": [3, 5, 10],
-    "threshold": [0.5, 0.6, 0.7, 0.8, 0.9, 0.95],
+    "stride": [3, 5],
+    "threshold": [0.7, 0.75, 0.8, 0.85, 0.9],
     "confirm": [1, 2, 3, 4],
-    "debounce_s": [0.5, 1.0, 2.0, 3.0],
+    "debounce_s": [1.0, 2.0, 3.0, 4.0, 5.0],
 }
-REFINE = {"filter_size": [1, 3, 5], "release_s": [1.0, 2.0, 4.0]}
+# The paper's filter of three recognitions is kept (filter_size=3); the release time is
+# refined around the best of the grid.
+REFINE = {"release_s": [1.0, 2.0, 4.0, 6.0]}
 WRONG_COST = 3.0  # a wrong or spurious command costs as much as this many on-time commands
 
 

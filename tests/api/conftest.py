@@ -24,3 +24,16 @@ def api(tmp_path: Path) -> Iterator[Api]:
     with TestClient(app) as client:
         yield Api(client, bus, settings, login(client, ADMIN), login(client, VIEWER))
         app.state.console.recorder.join()
+
+
+@pytest.fixture(scope="session")
+def checkpoint_path() -> Path:
+    """The gesture checkpoint the live engine runs (PROXIMA_TEST_CHECKPOINT, else the
+    shipped one)."""
+    import os
+
+    from proxima.gesture.classifier import default_checkpoint
+
+    path = Path(os.environ.get("PROXIMA_TEST_CHECKPOINT") or default_checkpoint())
+    assert path.is_file(), f"this test needs the gesture checkpoint at {path}"
+    return path

@@ -50,3 +50,50 @@ def test_rate_limit_and_replayed_frames() -> None:
     assert 4 <= sent <= 6
     # A replayed frame has no pixels: no thumbnail.
     assert not ThumbnailTap(bus, "replay").offer(Frame(t=0.0, index=0, image=None))
+
+
+def test_camera_stream_thumbnails_from_the_live_engine(tmp_path, checkpoint_path) -> None:  # type: ignore[no-untyped-def]
+    """A `file:` video stream through the real engine (MediaPipe pose) yields thumbnails
+    of its frames; the replayed stream beside it yields none."""
+    from api_helpers import laser_clip
+    from proxima.api.runtime import build_runtime
+    from proxima.settings import Settings
+
+    photo = _photo()
+    video = tmp_path / "operator.mp4"
+    writer = cv2.VideoWriter(
+        str(video), cv2.VideoWriter_fourcc(*"mp4v"), 15.0, (photo.shape[1], photo.shape[0])
+    )
+    for _ in range(45):
+        writer.write(photo)
+    writer.release()
+    settings = Settings.load(
+        config=None,
+        streams=[
+            {"name": "cam", "uri": f"file:{video}", "drone": "main"},
+            {
+                "name": "replay",
+                "uri": f"replay:{laser_clip('hover_f')}@30",
+                "drone": "main",
+                "priority": 1,
+            },
+        ],
+        recognition={"checkpoint": str(checkpoint_path)},
+        server={"db_path": str(tmp_path / "c.db"), "thumbnail_hz": 4.0},
+    )
+    bus = EventBus()
+    with bus.subscribe(types=["thumbnail"]) as sub:
+        runtime = build_runtime(settings, bus=bus, engine=True, drones=False, view=False)
+        try:
+            assert runtime.engine is not None, runtime.notes
+            first = sub.get(timeout=30)
+            time.sleep(1.0)
+            events = [first, *sub.drain()]
+        finally:
+            runtime.close()
+    assert first is not None, "no thumbnail from the camera stream"
+    assert {e.stream for e in events} == {"cam"}
+    assert 1 <= len(events) <= 4 * 4  # a modest rate, never every frame
+    jpeg = base64.b64decode(events[0].jpeg_b64)
+    decoded = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+    assert decoded.shape[1] == 320

@@ -67,8 +67,8 @@ def udp_port() -> int:
 def start_sim() -> Iterator[Callable[..., Sim]]:
     sims: list[Sim] = []
 
-    def start(*extra: str, sysid: int = 1, fast: bool = True) -> Sim:
-        port = free_udp_port()
+    def start(*extra: str, sysid: int = 1, fast: bool = True, port: int | None = None) -> Sim:
+        port = port or free_udp_port()
         args = [PROXIMA, "sim-drone", "--port", str(port), "--sysid", str(sysid)]
         args += [*(FAST if fast else ()), *extra]
         proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -9,32 +9,34 @@ import subprocess
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import typer
+from proxima.drone.commands import register
+from typer.testing import CliRunner
+
 if TYPE_CHECKING:
-    from conftest import Connect, StartSim
+    from conftest import StartSim
 
 
-def test_sim_drone_stops_cleanly_on_ctrl_c(start_sim: StartSim, connect: Connect) -> None:
-    # (SIGTERM is checked on every simulator by the start_sim fixture's teardown.)
-    sim = start_sim(sysid=5)
-    connect(sim)  # it really runs: a link hears it
-    assert sim.stop(signal.SIGINT) == 0
-    out = sim.proc.stdout.read()
-    assert f"udpin:127.0.0.1:{sim.port}" in out and "stopped" in out
-    assert "Traceback" not in sim.proc.stderr.read()
+def test_sim_drone_rejects_bad_options() -> None:
+    app = typer.Typer()
+    register(app)  # the same command functions `proxima` registers
+    runner = CliRunner()
+    for args, message in (
+        (["--sysid", "300"], "--sysid must be 1..255"),
+        (["--home", "50.1,14.4"], "--home must be LAT,LON,ALT"),
+        (["--autopilot", "betaflight"], "--autopilot must be ardupilot or px4"),
+        (["--loss", "1.5"], "--loss must be in [0, 1)"),
+    ):
+        result = runner.invoke(app, ["sim-drone", *args])
+        assert result.exit_code == 2, args
+        assert message in " ".join(result.output.split()), result.output
 
 
-def test_sim_drone_rejects_bad_options(proxima_cli: str) -> None:
-    run = subprocess.run(
-        [proxima_cli, "sim-drone", "--sysid", "300"], capture_output=True, text=True, timeout=30
-    )
-    assert run.returncode == 2 and "--sysid must be 1..255" in run.stderr
-
-
-def test_drone_cmd_takes_off_and_logs_a_gesture(
+def test_drone_cmd_flies_and_sim_drone_stops_on_ctrl_c(
     start_sim: StartSim, udp_port: int, proxima_cli: str, tmp_path: Path
 ) -> None:
     gcs = udp_port
-    start_sim("--out-port", str(gcs), sysid=4)
+    sim = start_sim("--out-port", str(gcs), sysid=4)
     connection = f"udpin:127.0.0.1:{gcs}"  # the simulator's second ground-station port
     base = [proxima_cli, "drone-cmd", "--connect", connection, "--json"]
     run = subprocess.run([*base, "takeoff", "1.5"], capture_output=True, text=True, timeout=60)
@@ -58,3 +60,10 @@ def test_drone_cmd_takes_off_and_logs_a_gesture(
     rows = con.execute("SELECT source, command, action, status FROM command_log").fetchall()
     con.close()
     assert rows == [("cli", "move_upward", "move", "sent")]
+
+    # Ctrl-C stops the simulator cleanly (SIGTERM is checked on every simulator by the
+    # start_sim fixture's teardown).
+    assert sim.stop(signal.SIGINT) == 0
+    stdout = sim.proc.stdout.read()
+    assert f"udpin:127.0.0.1:{sim.port}" in stdout and "stopped" in stdout
+    assert "Traceback" not in sim.proc.stderr.read()

@@ -10,14 +10,25 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from proxima.drone.controller import DroneController
-from proxima.drone.events import DroneAlarmEvent
+from proxima.drone.events import CommandResultEvent, DroneAlarmEvent
 from proxima.drone.mavlink_link import LinkConfig
-from proxima.events import ActionEvent, ArmingEvent, CommandEvent, EventBus
+from proxima.events import ActionEvent, ArmingEvent, CommandEvent, EventBus, Subscription
 from proxima.store.command_log import CommandLog
 from proxima.types import LinkState
 
 if TYPE_CHECKING:
     from conftest import Connect, StartSim
+
+
+def next_result(sub: Subscription, command: str) -> CommandResultEvent:
+    """The next answer (not a later outcome) for `command` on a command_result queue."""
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline:
+        event = sub.get(timeout=0.2)
+        answer = isinstance(event, CommandResultEvent) and event.status != "done"
+        if answer and event.command == command:
+            return event
+    raise AssertionError(f"no result for {command}")
 
 
 def test_two_vehicles_and_a_cut_link(start_sim: StartSim, connect: Connect) -> None:
@@ -55,6 +66,17 @@ def test_two_vehicles_and_a_cut_link(start_sim: StartSim, connect: Connect) -> N
         assert out.status == "refused" and link_a.sent_count() == sent
         kinds = {(e.drone, e.kind) for e in alarms.drain() if isinstance(e, DroneAlarmEvent)}
         assert ("a", "link_lost") in kinds and ("b", "link_lost") not in kinds
+
+        # The vehicle comes back (a new process on the same port): the link recovers,
+        # but gesture control stays disarmed until the operator arms it again.
+        start_sim(sysid=11, port=sim_a.port)
+        back = time.monotonic()
+        while link_a.state != LinkState.OK and time.monotonic() - back < 15.0:
+            time.sleep(0.02)
+        assert link_a.state == LinkState.OK
+        assert link_a.arm().ok and not ctl.gesture_control_armed("a")
+        recovered = [e for e in alarms.drain() if isinstance(e, DroneAlarmEvent)]
+        assert any(e.kind == "link_lost" and not e.active for e in recovered)
     finally:
         ctl.close()
 
@@ -96,8 +118,8 @@ def test_px4_offboard_flight(start_sim: StartSim, connect: Connect, tmp_path: Pa
         bus.publish(ActionEvent(t=0.9, stream="s", action="move_to_right", confidence=0.87))
         start = tel.position
         bus.publish(CommandEvent(t=1.0, stream="s", command="move_to_right", drone="alpha"))
-        sent = results.get(timeout=5.0)
-        assert sent is not None and sent.status == "sent" and sent.command == "move_to_right"
+        sent = next_result(results, "move_to_right")
+        assert sent.status == "sent"
         row = log.get(sent.log_id)
         assert row["confidence"] == 0.87 and row["gesture_t"] == 1.0 and row["stream"] == "s"
         target = (start[0], start[1] + 1.0, start[2])
@@ -107,10 +129,17 @@ def test_px4_offboard_flight(start_sim: StartSim, connect: Connect, tmp_path: Pa
         assert link.telemetry().mode == "OFFBOARD"
         assert link.sent_counts["SET_POSITION_TARGET_LOCAL_NED"] > 8
 
-        out = ctl.handle(CommandEvent(t=2.0, stream="s", command="hover", drone="alpha"))
-        assert out.status == "sent" and link.telemetry().mode == "LOITER"
-        out = ctl.handle(CommandEvent(t=3.0, stream="s", command="land", drone="alpha"))
-        assert out.status == "sent"
+        # wave_off: the engine publishes the command, then its disarm; the hold goes out.
+        bus.publish(CommandEvent(t=2.0, stream="s", command="wave_off", drone="alpha"))
+        bus.publish(ArmingEvent(t=2.0, stream="s", armed=False, reason="wave_off"))
+        abort = next_result(results, "wave_off")
+        assert abort.status == "sent" and abort.action == "abort"
+        assert link.telemetry().mode == "LOITER"  # PX4's Hold
+        bus.publish(CommandEvent(t=3.0, stream="s", command="land", drone="alpha"))
+        assert next_result(results, "land").status == "refused"  # disarmed by wave_off
+        bus.publish(CommandEvent(t=4.0, stream="s", command="have_command", drone="alpha"))
+        bus.publish(CommandEvent(t=5.0, stream="s", command="land", drone="alpha"))
+        assert next_result(results, "land").status == "sent"
         assert link.wait_for(lambda t: t.landed == "on_ground" and not t.armed, 8.0)
     finally:
         ctl.close()

@@ -4,6 +4,7 @@ a controllable clock)."""
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -140,3 +141,19 @@ def test_command_log_round_trip(tmp_path: Path) -> None:
         log.add(drone="a", source="x", command="y", colour="red")
     with pytest.raises(KeyError):
         log.update(999, ack="x")
+
+
+def test_docs_table_matches_the_shipped_mapping() -> None:
+    doc = Path(__file__).parents[2] / "docs" / "drone.md"
+    rows = {}
+    for line in doc.read_text().splitlines():
+        m = re.match(r"\| `(\w+)` \| (\w+)( \[([-\d, ]+)\])?", line)
+        if m and m.group(1) in GESTURES:
+            direction = tuple(float(v) for v in m.group(4).split(",")) if m.group(4) else None
+            rows[m.group(1)] = (m.group(2), direction)
+    mapping = load_mapping()
+    assert set(rows) == set(GESTURES)
+    for gesture, (action, direction) in rows.items():
+        entry = mapping.lookup(gesture)
+        assert entry.action == action, gesture
+        assert direction is None or entry.direction == direction, gesture

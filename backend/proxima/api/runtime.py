@@ -8,6 +8,7 @@ pretends. `proxima serve` and the demo use this.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from dataclasses import dataclass, field
 from typing import Any
@@ -84,7 +85,39 @@ def _start_engine(settings: Settings, bus: EventBus, realtime: bool) -> Any:
         realtime=realtime,
         checkpoint=settings.recognition.checkpoint,
     )
-    return engine.start()
+    engine.start()
+    tap_thumbnails(engine, settings, bus)
+    return engine
+
+
+def tap_thumbnails(engine: Any, settings: Settings, bus: EventBus) -> list[str]:
+    """Publish JPEG thumbnails of every camera stream's frames (at `server.thumbnail_hz`)
+    from the engine's stream threads; replayed streams have no pixels and get none.
+    Returns the streams tapped.
+
+    The engine has no frame hook, so each camera pipeline's `process` is wrapped: the
+    thumbnail is offered the frame, then the pipeline runs as before.
+    """
+    from proxima.api.thumbnails import ThumbnailTap
+
+    tapped = []
+    for s in settings.streams:
+        pipeline = engine.pipelines.get(s.name)
+        if s.kind != "camera" or pipeline is None:
+            continue
+        tap = ThumbnailTap(
+            bus, s.name, settings.server.thumbnail_hz, settings.server.thumbnail_width
+        )
+        original = pipeline.process
+
+        def process(frame: Any, _original: Any = original, _tap: ThumbnailTap = tap) -> Any:
+            with contextlib.suppress(ValueError):  # an odd frame never stops recognition
+                _tap.offer(frame)
+            return _original(frame)
+
+        pipeline.process = process
+        tapped.append(s.name)
+    return tapped
 
 
 def _start_drones(settings: Settings, bus: EventBus, db: Engine, rt: ConsoleRuntime) -> Any:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
 
 from sqlalchemy import Engine
 from sqlalchemy.orm import sessionmaker
@@ -28,3 +30,10 @@ class Console:
     estop: EmergencyStop | None = None
     promoter: ModelPromoter | None = None
     viz_port: int | None = None  # the viser server's port when one runs
+
+    @cached_property
+    def command_log(self) -> Any:
+        """The durable command log (proxima.store.command_log) in this database."""
+        from proxima.store.command_log import CommandLog
+
+        return CommandLog(self.db_engine)

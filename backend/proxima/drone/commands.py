@@ -131,9 +131,9 @@ def drone_cmd(
 ) -> None:
     """Send one command to a vehicle and print what it answered.
 
-    status | guided | mode NAME | arm | disarm [force] | takeoff ALT | goto N E D | hold |
-    speed M_S | land | gesture NAME (through the gesture mapping and the safety rules,
-    with gesture control armed by you: the person typing is the operator).
+    Actions: status, guided, mode NAME, arm, disarm, disarm force, takeoff ALT,
+    goto N E D, hold, speed M_S, land, gesture NAME (through the gesture mapping and the
+    safety rules, with gesture control armed by you: the person typing is the operator).
     """
     from rich.console import Console
 
@@ -327,15 +327,15 @@ def _print(console: Console, action: str, out: dict[str, Any]) -> None:
     for key, value in out.items():
         if key == "telemetry" and isinstance(value, dict):
             for k, v in value.items():
-                table.add_row(k, _fmt(v))
+                table.add_row(k, _fmt(v, 7 if k == "global_position" else 3))
         else:
             table.add_row(key, _fmt(value))
     console.print(table)
 
 
-def _fmt(value: object) -> str:
+def _fmt(value: object, digits: int = 3) -> str:
     if isinstance(value, tuple | list):
-        return "[" + ", ".join(f"{v:.3f}" if isinstance(v, float) else str(v) for v in value) + "]"
+        return "[" + ", ".join(_fmt(v, digits) for v in value) + "]"
     if isinstance(value, float):
-        return f"{value:.3f}"
+        return f"{value:.{digits}f}"
     return str(value)

@@ -18,7 +18,7 @@ import time
 from collections.abc import Mapping
 from concurrent.futures import Future
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 from typing import Any
 
 from proxima.drone.events import CommandResultEvent, DroneAlarmEvent
@@ -153,8 +153,15 @@ class DroneController:
             if event.action:
                 self._confidence[(event.stream, event.action)] = event.confidence
         elif isinstance(event, ArmingEvent):
-            for name in self.links:  # the engine arms the operator, i.e. every drone
-                self._set_control(name, event.armed)
+            # The engine arms the operator, i.e. every drone. Its disarm follows the
+            # command that caused it (wave_off, the hover on losing the operator): apply
+            # it in order on each drone's worker so that command still goes out first.
+            for name in self.links:
+                q = self._queues.get(name)
+                if q is None:
+                    self._set_control(name, event.armed)
+                else:
+                    q.put(("arming", event.armed))
         elif isinstance(event, CommandEvent):
             self.submit(event)
 
@@ -171,6 +178,9 @@ class DroneController:
             item = q.get()
             if item is None:
                 return
+            if item[0] == "arming":
+                self._set_control(name, item[1])
+                continue
             event, confidence, fut = item
             try:
                 fut.set_result(self.handle(event, confidence=confidence))
@@ -218,7 +228,14 @@ class DroneController:
         if link is None:
             return self._finish(event, base, mapped.action, "refused", f"unknown drone {drone!r}")
         with self._locks[drone]:
+            self._begin(base, mapped.action)
             return self._handle_locked(event, base, mapped, link)
+
+    def _begin(self, base: dict, action: str) -> None:
+        """Write the command's row (status "pending") before anything is sent."""
+        if self.log is not None:
+            base["log_id"] = self.log.add(**base, action=action, status="pending")
+        base["_started"] = datetime.now(UTC)
 
     def _handle_locked(
         self, event: CommandEvent, base: dict, mapped: MappedAction, link: DroneLink
@@ -239,6 +256,8 @@ class DroneController:
             )
         if action == "none":
             return self._finish(event, base, action, "ignored", "mapped to no action")
+        if action == "abort":  # disarm first: whatever happens to the hold, control is off
+            self._set_control(drone, False)
         if link.state != LinkState.OK:
             return self._finish(event, base, action, "refused", f"link {link.state}: nothing sent")
         tel = link.telemetry()
@@ -248,8 +267,6 @@ class DroneController:
         if not verdict.ok:
             return self._finish(event, base, action, "refused", verdict.reason)
         if action in ("hold", "abort"):
-            if action == "abort":
-                self._set_control(drone, False)
             if not tel.flying:
                 reason = "on the ground: nothing to hold"
                 outcome = "control_disarmed" if action == "abort" else None
@@ -399,29 +416,38 @@ class DroneController:
     ) -> ControlOutcome:
         if outcome is None and status in ("refused", "ignored", "failed"):
             outcome = status
-        log_id = None
+        fields: dict[str, Any] = dict(base)
+        log_id: int | None = fields.pop("log_id", None)
+        started: datetime | None = fields.pop("_started", None)
         if self.log is not None:
             now = datetime.now(UTC)
-            fields: dict[str, Any] = {
-                **base,
-                "action": action,
-                "status": status,
-                "reason": reason,
-                "outcome": outcome,
-            }
+            fields.update(
+                {
+                    "action": action,
+                    "status": status,
+                    "reason": reason,
+                    "outcome": outcome,
+                }
+            )
             if result is not None:
+                sent_at = started or now
+                if result.latency_s is not None:
+                    sent_at = now - timedelta(seconds=result.latency_s)
                 fields.update(
                     sent=result.sent or None,
                     ack=result.ack,
                     attempts=result.attempts,
-                    sent_at=now if status in ("sent", "failed") else None,
+                    sent_at=sent_at if status in ("sent", "failed") else None,
                     acked_at=now if result.confirmed else None,
                 )
                 if result.latency_s is not None:
                     fields["ack_latency_ms"] = result.latency_s * 1000.0
             if outcome is not None and outcome not in ("refused", "ignored", "failed"):
                 fields["completed_at"] = now
-            log_id = self.log.add(**fields)
+            if log_id is None:
+                log_id = self.log.add(**fields)
+            else:
+                self.log.update(log_id, **fields)
         out = ControlOutcome(
             event.drone, event.command, action, status, reason, result, log_id, target
         )
@@ -535,6 +561,7 @@ class DroneController:
         }
         link = self.links[event.drone]
         with self._locks[event.drone]:
+            self._begin(base, "hold")
             if link.state != LinkState.OK:
                 self._finish(event, base, "hold", "refused", f"link {link.state}")
                 return
@@ -623,6 +650,7 @@ class DroneController:
             "gesture_t": None,
             "confidence": None,
         }
+        self._begin(base, req.kind)
         result = link.land() if req.kind == "land" else link.disarm(force=True)
         track = "land" if req.kind == "land" else None
         return self._sent(event, base, req.kind, result, link, track=track)

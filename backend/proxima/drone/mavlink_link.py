@@ -606,8 +606,9 @@ class MavlinkLink(DroneLink):
         if self._state != LinkState.OK and not silent:
             was = self._state
             self._state = LinkState.OK
+            self._request_streams()  # again after a loss: the vehicle may have rebooted
             if was == LinkState.CONNECTING:
-                self._on_first_heartbeat()
+                self._first_heartbeat.set()
             else:
                 self._alarm("link_lost", f"{self.name}: link back", active=False)
             self._publish_state()
@@ -620,8 +621,8 @@ class MavlinkLink(DroneLink):
             )
             self._publish_state()
 
-    def _on_first_heartbeat(self) -> None:
-        self._first_heartbeat.set()
+    def _request_streams(self) -> None:
+        """Ask for the telemetry this link reads, and for the home position."""
         conn = self._conn
         if conn is None:
             return

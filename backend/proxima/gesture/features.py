@@ -6,7 +6,9 @@
   also keeps federated clients from scaling with statistics only they have). Per window:
   centred on the hips, scaled by the torso length, turned about the vertical axis to
   face the camera (from the shoulder and hip lines, using MediaPipe's z), then the 17
-  joints of the skeleton both data sets share, as 2D positions plus their velocities.
+  joints of the skeleton both data sets share, as 2D positions plus their velocities,
+  and the hand points' offsets from their wrist (thumb up or down is all that tells
+  all_clear from not_clear; zero where a data set has no hands).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from proxima.gesture.geometry import facing_yaw, hip_centre, torso_length
-from proxima.gesture.skeleton import COMMON
+from proxima.gesture.skeleton import COMMON, HAND_WRIST, HANDS
 
 
 class PaperPipeline:
@@ -52,9 +54,11 @@ class BodyPipeline:
     name = "body"
     joints = COMMON
 
+    hand_gain = 5.0  # hand offsets are ~0.1 torso lengths; bring them to the joints' scale
+
     @property
     def num_features(self) -> int:
-        return len(self.joints) * 4
+        return len(self.joints) * 4 + len(HANDS) * 2
 
     def fit(self, metric: np.ndarray) -> BodyPipeline:
         return self  # scale-free: nothing to fit
@@ -74,12 +78,14 @@ class BodyPipeline:
         return out
 
     def transform(self, metric: np.ndarray, has_z: np.ndarray | None = None) -> np.ndarray:
-        pos = self.canonical(metric, has_z)[:, :, list(self.joints), :2]  # (N, W, J, 2)
+        can = self.canonical(metric, has_z)
+        pos = can[:, :, list(self.joints), :2]  # (N, W, 17, 2)
         vel = np.diff(pos, axis=1, prepend=pos[:, :1])
+        hands = can[:, :, list(HANDS), :2] - can[:, :, list(HAND_WRIST), :2]  # (N, W, 6, 2)
         n, w = pos.shape[:2]
-        return np.concatenate([pos.reshape(n, w, -1), 10 * vel.reshape(n, w, -1)], -1).astype(
-            np.float32
-        )
+        parts = [pos.reshape(n, w, -1), 10 * vel.reshape(n, w, -1),
+                 self.hand_gain * hands.reshape(n, w, -1)]  # fmt: skip
+        return np.concatenate(parts, -1).astype(np.float32)
 
     def state(self) -> dict[str, Any]:
         return {}

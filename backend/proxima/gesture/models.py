@@ -53,7 +53,7 @@ class PaperLSTM(nn.Module):
 
 @dataclass
 class TCNConfig:
-    num_features: int = 68
+    num_features: int = 80
     num_classes: int = NUM_CLASSES
     channels: int = 64
     kernel: int = 5

@@ -27,6 +27,11 @@ OPENPOSE_TO_MEDIAPIPE: dict[int, int] = {
 # The common 2D skeleton both data sets share: these 17 MediaPipe landmarks (+ neck).
 COMMON = tuple(sorted(OPENPOSE_TO_MEDIAPIPE.values()))
 
+# Hand points of the pose model (pinky, index, thumb; left then right) and the wrist each
+# hangs from. UAV-Gesture has no hands: its loader puts them on the wrist (offset 0).
+HANDS = (17, 19, 21, 18, 20, 22)
+HAND_WRIST = (15, 15, 15, 16, 16, 16)
+
 # Each landmark's left/right twin (itself on the midline), for mirroring.
 _PAIRS = [(1, 4), (2, 5), (3, 6), (7, 8), (9, 10)] + [(i, i + 1) for i in range(11, 33, 2)]
 MIRROR: list[int] = list(range(33))

@@ -113,10 +113,13 @@ def fit(
     val: Windows | None,
     cfg: TrainConfig,
     on_epoch: Callable[[EpochLog], None] | None = None,
+    penalty: Callable[[nn.Module], torch.Tensor] | None = None,
 ) -> list[EpochLog]:
     """Train `model` in place; with `val`, stop early and restore the best weights.
 
-    The pipeline must already be fitted. Returns one log entry per epoch.
+    The pipeline must already be fitted. `penalty(model)`, if given, is added to every
+    batch's loss (federated clients use it for FedProx's proximal term). Returns one log
+    entry per epoch.
     """
     torch.set_num_threads(cfg.threads)
     rng = seed_everything(cfg.seed)
@@ -141,7 +144,7 @@ def fit(
             xb, yb = torch.from_numpy(x[idx]), torch.from_numpy(y[idx])
             opt.zero_grad()
             loss = loss_fn(model(xb), yb)
-            loss.backward()
+            (loss + penalty(model) if penalty is not None else loss).backward()
             nn.utils.clip_grad_norm_(model.parameters(), cfg.clip_norm)
             opt.step()
             total += loss.item() * len(idx)

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from proxima.gesture.clip import Clip, DataError
-from proxima.gesture.skeleton import OPENPOSE_TO_MEDIAPIPE
+from proxima.gesture.skeleton import HAND_WRIST, HANDS, MIRROR, OPENPOSE_TO_MEDIAPIPE
 from proxima.types import NUM_LANDMARKS
 
 WIDTH, HEIGHT = 1920, 1080
@@ -66,11 +66,12 @@ def load_mat(path: str | Path, gesture: str) -> Clip:
         vis[:, mp] = present[:, op]
     # A joint never detected in the whole clip (e.g. the right ear in 3 clips): take its
     # mirror twin so the skeleton stays complete; visibility stays 0.
-    from proxima.gesture.skeleton import MIRROR
-
     for mp in OPENPOSE_TO_MEDIAPIPE.values():
         if np.isnan(xyz[:, mp]).any():
             xyz[:, mp] = xyz[:, MIRROR[mp]]
+    # No hand points in OpenPose's body model: put them on their wrist, which the body
+    # pipeline reads as "no hand shape seen" (zero offset).
+    xyz[:, list(HANDS)] = xyz[:, list(HAND_WRIST)]
     if np.isnan(xyz).any():
         raise DataError(f"{path}: a joint and its mirror twin are never detected")
     folder = FOLDER_TO_GESTURE.get(gesture, gesture)

@@ -1,7 +1,7 @@
 """The durable command log: every drone command, the gesture that caused it, what was
-sent, the vehicle's acknowledgement and the outcome. One row per command; the row is
-written before anything is sent and updated as the answer and the outcome arrive, so a
-crash leaves a row that says how far the command got."""
+sent, the vehicle's acknowledgement and the outcome. One row per command; the drone
+controller writes it (status "pending") before anything is sent and updates it as the
+answer and the outcome arrive, so a crash leaves a row that says how far the command got."""
 
 from __future__ import annotations
 

@@ -20,9 +20,7 @@ def command_log(
     drone: str | None = None,
     limit: Annotated[int, Query(ge=1, le=1000)] = 100,
 ) -> list[dict[str, Any]]:
-    from proxima.store.command_log import CommandLog
-
-    return CommandLog(console.db_engine).recent(limit=limit, drone=drone)
+    return console.command_log.recent(limit=limit, drone=drone)
 
 
 @router.get("/live")

@@ -1,0 +1,127 @@
+"""The Flower ClientApp: a drone's side of a run.
+
+Thin: the run config arrives with every message (so the simulation and the deployment
+engine behave alike), the drone's own facts come from its node config (`partition-id`,
+`num-partitions`, and on real drones `drone`, `data`, `samples-db`), and the work is
+`task.train_local` / `task.Scorer` on the drone's `data.drone_data`. Only weights and
+numbers leave the drone, never landmarks. Its reply carries a `report` ConfigRecord
+with the drone's name and notes (e.g. a corrupt sample it skipped).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from flwr.app import ArrayRecord, ConfigRecord, Context, Message, MetricRecord, RecordDict
+from flwr.clientapp import ClientApp
+
+from proxima.federated.config import FLConfig, default_drone_name
+from proxima.federated.data import DroneData, drone_data
+from proxima.federated.task import Scorer, new_model, set_weights, train_local
+
+# Keys the server adds to the run config in its messages (not FLConfig fields).
+_SERVER_KEYS = ("server-round",)
+
+
+@dataclass(frozen=True)
+class Node:
+    """What a drone knows about itself (Flower's node config)."""
+
+    partition_id: int
+    num_partitions: int
+    drone: str
+    data: tuple[str, ...]
+    samples_db: str
+
+    @classmethod
+    def from_context(cls, context: Context, cfg: FLConfig) -> Node:
+        nc = dict(context.node_config)
+        pid = int(nc.get("partition-id", 0))
+        num = int(nc.get("num-partitions", cfg.num_drones))
+        data = str(nc.get("data", "")) or cfg.data
+        return cls(
+            partition_id=pid,
+            num_partitions=num,
+            drone=str(nc.get("drone", "")) or default_drone_name(pid, num),
+            data=tuple(s for s in data.split(";") if s),
+            samples_db=str(nc.get("samples-db", "")),
+        )
+
+
+def config_of(msg: Message) -> FLConfig:
+    rc = {k: v for k, v in msg.content["config"].items() if k not in _SERVER_KEYS}
+    return FLConfig.from_run_config(rc)
+
+
+_CACHE: dict[tuple[str, Node], DroneData] = {}
+
+
+def _local(msg: Message, context: Context) -> tuple[FLConfig, Node, DroneData]:
+    """The run config, this drone's facts, and its data (built once per run and process:
+    samples can change between runs, so the run id is part of the key)."""
+    cfg = config_of(msg)
+    node = Node.from_context(context, cfg)
+    key = "|".join(
+        str(getattr(cfg, k))
+        for k in (
+            "run_id",
+            "partition",
+            "num_drones",
+            "dirichlet_alpha",
+            "seed",
+            "stride",
+            "max_gap",
+            "include_samples",
+            "data",
+        )
+    )
+    if (key, node) not in _CACHE:
+        while len(_CACHE) >= 8:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[(key, node)] = drone_data(
+            cfg, node.partition_id, node.drone, node.data or None, node.samples_db or None
+        )
+    return cfg, node, _CACHE[(key, node)]
+
+
+def _reply(
+    msg: Message, node: Node, data: DroneData, arrays: ArrayRecord | None, metrics: dict[str, float]
+) -> Message:
+    content = RecordDict({"metrics": MetricRecord(metrics)})
+    if arrays is not None:
+        content["arrays"] = arrays
+    content["report"] = ConfigRecord({"drone": node.drone, "notes": "\n".join(data.notes)})
+    return Message(content=content, reply_to=msg)
+
+
+app = ClientApp()
+
+
+@app.train()
+def train(msg: Message, context: Context) -> Message:
+    """Local epochs from the global weights; reply with the new weights and metrics."""
+    cfg, node, data = _local(msg, context)
+    if not len(data.fit):
+        raise RuntimeError(f"drone {node.drone}: no training windows in its data")
+    model, pipeline = new_model(cfg)
+    set_weights(model, {k: a.numpy() for k, a in msg.content["arrays"].items()})
+    server_round = int(msg.content["config"].get("server-round", 0))
+    res = train_local(model, pipeline, data.fit, data.val, cfg, server_round, node.partition_id)
+    metrics = {
+        "num-examples": res.num_examples,
+        "train_loss": res.train_loss,
+        "val_loss": res.val_loss,
+        "val_accuracy": res.val_accuracy,
+        "seconds": res.seconds,
+        "samples_used": data.samples_used,
+    }
+    return _reply(msg, node, data, ArrayRecord(model.state_dict()), metrics)
+
+
+@app.evaluate()
+def evaluate(msg: Message, context: Context) -> Message:
+    """The global model on this drone's validation windows."""
+    cfg, node, data = _local(msg, context)
+    loss, acc = Scorer(cfg, data.val)({k: a.numpy() for k, a in msg.content["arrays"].items()})
+    metrics = {"num-examples": max(len(data.val), 1), "loss": loss, "accuracy": acc, "seconds": 0.0}
+    return _reply(msg, node, data, None, metrics)

@@ -1,0 +1,138 @@
+"""Model, local training and scoring for federated runs: the centralised code
+(`proxima.gesture.models`, `features`, `train`) with Flower's ArrayRecord at the edges.
+
+Nothing here knows about Flower's apps or engines; the ClientApp and ServerApp are thin
+wrappers around these functions.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from torch import nn
+
+from proxima.federated.config import FLConfig
+from proxima.gesture.features import Pipeline, make_pipeline
+from proxima.gesture.models import build_model
+from proxima.gesture.train import TrainConfig, evaluate_loss, features, fit
+from proxima.gesture.windows import Windows
+
+
+def new_model(cfg: FLConfig) -> tuple[nn.Module, Pipeline]:
+    """A freshly initialised model (seeded, so every party starts identical) and the
+    scale-free feature pipeline."""
+    pipeline = make_pipeline(cfg.pipeline)
+    torch.manual_seed(cfg.seed)
+    return build_model(cfg.model, num_features=pipeline.num_features), pipeline
+
+
+def get_weights(model: nn.Module) -> dict[str, np.ndarray]:
+    return {k: v.detach().cpu().numpy().copy() for k, v in model.state_dict().items()}
+
+
+def set_weights(model: nn.Module, weights: dict[str, np.ndarray]) -> None:
+    """Load weights (float arrays by state-dict key).
+
+    Raises:
+        ValueError: a missing or unexpected key, or an array of the wrong shape.
+    """
+    own = model.state_dict()
+    if set(weights) != set(own):
+        missing, extra = sorted(set(own) - set(weights)), sorted(set(weights) - set(own))
+        raise ValueError(f"weights do not fit the model: missing {missing}, unexpected {extra}")
+    for k, v in own.items():
+        if tuple(np.shape(weights[k])) != tuple(v.shape):
+            raise ValueError(
+                f"weight {k!r}: shape {np.shape(weights[k])}, model has {tuple(v.shape)}"
+            )
+    model.load_state_dict(
+        {k: torch.as_tensor(np.asarray(weights[k]), dtype=v.dtype) for k, v in own.items()}
+    )
+
+
+def proximal_penalty(model: nn.Module, mu: float) -> Callable[[nn.Module], torch.Tensor] | None:
+    """FedProx's (mu / 2) * ||w - w_global||^2 against the weights the model has now."""
+    if mu <= 0:
+        return None
+    anchor = [p.detach().clone() for p in model.parameters()]
+
+    def penalty(m: nn.Module) -> torch.Tensor:
+        return (mu / 2) * sum(
+            ((p - a) ** 2).sum() for p, a in zip(m.parameters(), anchor, strict=True)
+        )  # type: ignore[return-value]
+
+    return penalty
+
+
+@dataclass
+class LocalResult:
+    """What a drone reports after its local epochs (no data, only numbers)."""
+
+    num_examples: int
+    train_loss: float
+    val_loss: float
+    val_accuracy: float
+    epochs: int
+    seconds: float
+
+
+def train_local(
+    model: nn.Module,
+    pipeline: Pipeline,
+    fit_w: Windows,
+    val_w: Windows,
+    cfg: FLConfig,
+    server_round: int,
+    partition_id: int,
+) -> LocalResult:
+    """The paper's local step: `local_epochs` epochs of the centralised loop (AdamW,
+    ReduceLROnPlateau, early stopping with best weights, gradient clipping), seeded per
+    round and drone, with FedProx's proximal term when the strategy asks for it."""
+    t0 = time.perf_counter()
+    tc = TrainConfig(
+        epochs=cfg.local_epochs,
+        patience=cfg.patience,
+        batch_size=cfg.batch_size,
+        lr=cfg.learning_rate,
+        seed=cfg.seed + 1000 * server_round + partition_id,
+        stride=cfg.stride,
+        max_gap=cfg.max_gap,
+        threads=cfg.threads,
+    )
+    mu = cfg.proximal_mu if cfg.strategy == "fedprox" else 0.0
+    history = fit(
+        model,
+        pipeline,
+        fit_w,
+        val_w if len(val_w) else None,
+        tc,
+        penalty=proximal_penalty(model, mu),
+    )
+    best = min(history, key=lambda h: h.val_loss)
+    return LocalResult(
+        num_examples=len(fit_w),
+        train_loss=float(history[-1].train_loss),
+        val_loss=float(best.val_loss),
+        val_accuracy=float(best.val_accuracy),
+        epochs=len(history),
+        seconds=time.perf_counter() - t0,
+    )
+
+
+class Scorer:
+    """Loss and accuracy of weights on fixed windows; features computed once."""
+
+    def __init__(self, cfg: FLConfig, windows: Windows) -> None:
+        self.model, self.pipeline = new_model(cfg)
+        self.windows = windows
+        self.x = features(self.pipeline, windows) if len(windows) else None
+
+    def __call__(self, weights: dict[str, np.ndarray]) -> tuple[float, float]:
+        if self.x is None:
+            return float("nan"), float("nan")
+        set_weights(self.model, weights)
+        return evaluate_loss(self.model, self.x, self.windows.labels)
