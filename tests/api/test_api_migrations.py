@@ -29,7 +29,15 @@ def test_head_matches_every_table_model(tmp_path: Path) -> None:
     assert migrations.current_revision(engine) == migrations.head_revision()
     assert _schema_diff(engine) == []
     tables = set(migrations.target_metadata().tables)
-    assert {"users", "user_sessions", "samples", "command_log"} <= tables
+    assert {
+        "users",
+        "user_sessions",
+        "samples",
+        "command_log",
+        "training_runs",
+        "training_rounds",
+        "training_client_results",
+    } <= tables
     migrations.upgrade(engine)  # idempotent
 
 

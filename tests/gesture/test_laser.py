@@ -41,8 +41,8 @@ def _broken_copy(laser_dir: Path, tmp_path: Path, name: str, edit) -> Path:
 @pytest.mark.parametrize(
     ("edit", "message"),
     [
-        (lambda ls: [ls[0].replace(",z,", ",depth,")] + ls[1:], ":1: missing column(s) z"),
-        (lambda ls: ls[:5] + [ls[5].replace("0.", "abc", 1)] + ls[6:], ":6: column"),
+        (lambda ls: [ls[0].replace(",z,", ",depth,"), *ls[1:]], ":1: missing column(s) z"),
+        (lambda ls: [*ls[:5], ls[5].replace("0.", "abc", 1), *ls[6:]], ":6: column"),
         (lambda ls: ls[:1] + ls[2:], ":2: frame 1 has 32 landmarks"),
     ],
     ids=["missing-column", "non-numeric", "32-landmarks"],

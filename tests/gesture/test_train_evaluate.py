@@ -8,10 +8,10 @@ from typer.testing import CliRunner
 
 from proxima.cli import app
 from proxima.gesture.classifier import GestureClassifier
-from proxima.gesture.models import build_model
-from proxima.gesture.train import TrainConfig, fit
 from proxima.gesture.features import PaperPipeline
 from proxima.gesture.geometry import to_metric
+from proxima.gesture.models import build_model
+from proxima.gesture.train import TrainConfig, fit
 from proxima.gesture.windows import make_windows, split_clips
 from proxima.types import GESTURES
 

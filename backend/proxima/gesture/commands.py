@@ -34,14 +34,19 @@ def train(
     data: DataOpt = None,
     model: Annotated[str, typer.Option(help="tcn (default) or paper-lstm.")] = "tcn",
     split: SplitOpt = "temporal",
-    pipeline: Annotated[str | None, typer.Option(help="paper or body (default: the model's).")] = None,
-    epochs: int = 60,
-    patience: int = 12,
-    stride: Annotated[int, typer.Option(help="Frames between training windows.")] = 3,
-    max_gap: Annotated[int, typer.Option(help="Longest gap (missing frames) a window may span.")] = 5,
+    pipeline: Annotated[
+        str | None, typer.Option(help="paper or body (default: the model's).")
+    ] = None,
+    epochs: int = 40,
+    patience: int = 10,
+    stride: Annotated[int, typer.Option(help="Frames between training windows.")] = 4,
+    max_gap: Annotated[
+        int, typer.Option(help="Longest gap (missing frames) a window may span.")
+    ] = 5,
     seed: int = 0,
     threads: Annotated[int, typer.Option(help="Torch threads.")] = 2,
     yaw: Annotated[float, typer.Option(help="Extra yaw augmentation, degrees.")] = 30.0,
+    mirror: Annotated[bool, typer.Option(help="Left-right mirroring augmentation.")] = False,
 ) -> None:
     """Train a gesture model on a split's training part and save one self-contained file."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -51,7 +56,7 @@ def train(
     from proxima.gesture.workflow import train_model
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
-                      seed=seed, threads=threads, yaw_deg=yaw)  # fmt: skip
+                      seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror)  # fmt: skip
     command = "proxima " + shlex.join(sys.argv[1:])
     with Progress(
         TextColumn("[bold]train[/]"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
@@ -71,7 +76,9 @@ def train(
             ))  # fmt: skip
 
         try:
-            result = train_model(data, model, split, out, cfg, pipeline, command, on_epoch, on_start)
+            result = train_model(
+                data, model, split, out, cfg, pipeline, command, on_epoch, on_start
+            )
         except (DataError, ValueError) as exc:
             _fail(exc)
     best = min(result.history, key=lambda h: h.val_loss)
@@ -122,8 +129,8 @@ def protocols(
         typer.Option(help="Score temporal/cross-view on this data only (e.g. laser)."),
     ] = None,
     model: str = "tcn",
-    epochs: int = 60,
-    stride: int = 3,
+    epochs: int = 40,
+    stride: int = 4,
     seed: int = 0,
     threads: int = 2,
 ) -> None:
@@ -155,6 +162,23 @@ def protocols(
     typer.echo(results_table(rows))
 
 
+def model_card(
+    checkpoint: Annotated[Path, typer.Option(help="The checkpoint to describe.")],
+    out: Annotated[Path, typer.Option(help="Markdown file to write.")],
+    results: Annotated[
+        list[Path] | None, typer.Option(help="Protocol results JSON (repeatable).")
+    ] = None,
+    notes: Annotated[Path | None, typer.Option(help="Markdown to append.")] = None,
+) -> None:
+    """Write a model card (Markdown) for a checkpoint from its metadata and results."""
+    from proxima.gesture.model_card import render_model_card
+
+    rows = [row for f in results or [] for row in json.loads(f.read_text())]
+    text = render_model_card(checkpoint, rows, notes.read_text() if notes else "")
+    out.write_text(text)
+    typer.echo(f"wrote {out}")
+
+
 def fetch(
     name: Annotated[str, typer.Argument(help="laser or uav-gesture")] = "laser",
     dest: Annotated[Path | None, typer.Option(help="Folder (default: the user cache).")] = None,
@@ -176,6 +200,7 @@ def register(app: typer.Typer) -> None:
     app.command()(train)
     app.command()(evaluate)
     app.command()(protocols)
+    app.command("model-card")(model_card)
     data_app = typer.Typer(help="Data sets: fetch them for offline use.", no_args_is_help=True)
     data_app.command()(fetch)
     app.add_typer(data_app, name="data")

@@ -35,10 +35,14 @@ def metrics(y_true: np.ndarray, probs: np.ndarray, clip: np.ndarray) -> dict[str
         "macro_recall": float(r[present].mean()),
         "macro_f1": float(f[present].mean()),
         "per_class": {
-            g: {"precision": float(p[i]), "recall": float(r[i]), "f1": float(f[i]),
-                "support": int(support[i])}
+            g: {
+                "precision": float(p[i]),
+                "recall": float(r[i]),
+                "f1": float(f[i]),
+                "support": int(support[i]),
+            }
             for i, g in enumerate(GESTURES)
-        },  # fmt: skip
+        },
         "confusion": confusion_matrix(y_true, y_pred, labels=labels).tolist(),
         "clip_accuracy": float(np.mean(np.asarray(clip_true) == np.asarray(clip_pred))),
     }

@@ -12,7 +12,6 @@ import numpy as np
 
 from proxima.gesture.skeleton import L_HIP, L_SHOULDER, R_HIP, R_SHOULDER
 
-
 # MediaPipe's z is documented as "roughly the scale of x", but on the LASER side views
 # a shoulder line turned by its own z comes out 2.9 times the front view's width. With
 # z scaled by 0.35 the turned width matches the front view (0.64 / 0.71 / 0.72 torso

@@ -27,9 +27,7 @@ def parse_name(path: Path) -> tuple[str, str, str]:
     """
     m = _NAME.match(path.name)
     if not m:
-        raise DataError(
-            f"{path}: file name does not match DJI_<n>_<gesture>_<f|l|r>.MP4.csv"
-        )
+        raise DataError(f"{path}: file name does not match DJI_<n>_<gesture>_<f|l|r>.MP4.csv")
     if m["gesture"] not in GESTURES:
         raise DataError(f"{path}: unknown gesture {m['gesture']!r} in the file name")
     return m["clip"], m["gesture"], m["view"]
@@ -84,7 +82,7 @@ def load_laser_csv(path: str | Path) -> Clip:
             file and line.
     """
     path = Path(path)
-    clip_id, gesture, view = parse_name(path)
+    _, gesture, view = parse_name(path)
     rows = _read_rows(path)
     if not np.all(np.isfinite(rows)):
         r = int(np.argwhere(~np.isfinite(rows))[0][0])

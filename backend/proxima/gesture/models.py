@@ -87,7 +87,9 @@ class TCN(nn.Module):
         self.blocks = nn.Sequential(
             *[_Block(cfg.channels, cfg.kernel, d, cfg.dropout) for d in cfg.dilations]
         )
-        self.head = nn.Sequential(nn.Dropout(cfg.dropout), nn.Linear(2 * cfg.channels, cfg.num_classes))
+        self.head = nn.Sequential(
+            nn.Dropout(cfg.dropout), nn.Linear(2 * cfg.channels, cfg.num_classes)
+        )
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:  # x: (N, W, F)
         h = self.blocks(self.stem(x.transpose(1, 2)))  # (N, C, W)

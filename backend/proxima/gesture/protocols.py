@@ -35,7 +35,7 @@ def run_protocols(
             ckpt = folder / f"{model}-{split.replace(':', '-')}.pt"
             tr = train_model(data, model, split, ckpt, replace(cfg))
             ev_data = data if split.startswith("uav-gesture") else (eval_data or data)
-            m = evaluate_checkpoint(ckpt, ev_data, split, stride=cfg.stride)
+            m = evaluate_checkpoint(ckpt, ev_data, split)
             row = {
                 "split": split,
                 "model": model,

@@ -26,8 +26,8 @@ from proxima.gesture.windows import Windows
 
 @dataclass
 class TrainConfig:
-    epochs: int = 60
-    patience: int = 12  # epochs without a better validation loss before stopping
+    epochs: int = 40
+    patience: int = 10  # epochs without a better validation loss before stopping
     batch_size: int = 64
     lr: float = 2e-3
     weight_decay: float = 1e-4
@@ -35,11 +35,11 @@ class TrainConfig:
     lr_patience: int = 4
     lr_factor: float = 0.5
     seed: int = 0
-    stride: int = 3
+    stride: int = 4
     max_gap: int = 5
     rotate_deg: float = 15.0  # the paper's augmentation
     yaw_deg: float = 30.0  # extra yaw for windows with depth
-    mirror: bool = True
+    mirror: bool = False  # off: on the temporal split it cost 2 points (0.925 -> 0.903)
     label_smoothing: float = 0.05
     threads: int = 2
     extra: dict = field(default_factory=dict)
@@ -155,7 +155,12 @@ def fit(
             val_loss, val_acc = train_loss, float("nan")
         sched.step(val_loss)
         log = EpochLog(
-            epoch, train_loss, val_loss, val_acc, opt.param_groups[0]["lr"], time.perf_counter() - t0
+            epoch,
+            train_loss,
+            val_loss,
+            val_acc,
+            opt.param_groups[0]["lr"],
+            time.perf_counter() - t0,
         )
         history.append(log)
         if on_epoch:

@@ -128,7 +128,7 @@ class SplitParts:
 
 def temporal_parts(clip: Clip, window: int) -> tuple[Clip, Clip]:
     """First 70% of rows minus one window (the gap) to train, last 30% to test."""
-    cut = int(round(len(clip) * TEMPORAL_TRAIN_FRACTION))
+    cut = round(len(clip) * TEMPORAL_TRAIN_FRACTION)
     return clip.slice(0, max(cut - window, 0)), clip.slice(cut, len(clip))
 
 
@@ -188,7 +188,7 @@ def validation_parts(train: Sequence[Clip], window: int, fraction: float = 0.15)
     early stopping, so validation windows never overlap training windows."""
     fit, val = [], []
     for c in train:
-        cut = int(round(len(c) * (1 - fraction)))
+        cut = round(len(c) * (1 - fraction))
         if cut - window < window or len(c) - cut < window:
             fit.append(c)  # too short to split: all of it trains
             continue
