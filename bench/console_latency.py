@@ -291,7 +291,7 @@ def plot(result: dict[str, Any], path: Path) -> None:
     lat = result["latency_ms"]
     ax.set_title(
         f"{result['streams']} streams: min {result['min_stream_hz']:.1f} Hz/stream, "
-        f"latency median {lat['median']:.0f} ms, p95 {lat['p95']:.0f} ms",
+        f"latency median {lat['median']:.1f} ms, p95 {lat['p95']:.1f} ms",
         fontsize=9,
     )
     ax.set_ylim(bottom=0)

@@ -28,6 +28,9 @@ def _register_all() -> None:
     from proxima.api import commands as api_commands
 
     api_commands.register(app)
+    from proxima.federated import commands as federated_commands
+
+    federated_commands.register(app)
 
 
 _register_all()

@@ -16,7 +16,7 @@ import os
 import tomllib
 from contextvars import ContextVar
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, SecretStr, ValidationError, model_validator
 from pydantic_settings import (
@@ -164,6 +164,14 @@ class ViewSettings(_Section):
     update_hz: float = Field(10.0, gt=0)
 
 
+class TrainingSettings(_Section):
+    """Federated runs started from the console: on Flower's deployment engine (a local
+    SuperLink and one SuperNode per drone, the default) or its simulation engine."""
+
+    enabled: bool = True
+    engine: Literal["deployment", "simulation"] = "deployment"
+
+
 _toml_path: ContextVar[Path | None] = ContextVar("proxima_toml_path", default=None)
 
 
@@ -201,6 +209,7 @@ class Settings(BaseSettings):
     safety: SafetySettings = SafetySettings()
     server: ServerSettings = ServerSettings()
     view: ViewSettings = ViewSettings()
+    training: TrainingSettings = TrainingSettings()
     admin_user: str | None = None
     admin_password: SecretStr | None = None
 

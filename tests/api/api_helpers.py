@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fastapi.testclient import TestClient
+
 from proxima.events import EventBus
 from proxima.settings import Settings
 

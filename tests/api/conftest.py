@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 from api_helpers import ADMIN, VIEWER, Api, login, make_settings
 from fastapi.testclient import TestClient
+
 from proxima.api import create_app
 from proxima.events import EventBus
 from proxima.store.users import Role, create_user

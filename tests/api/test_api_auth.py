@@ -7,11 +7,12 @@ from pathlib import Path
 
 from api_helpers import ADMIN, VIEWER, Api, login
 from fastapi.testclient import TestClient
+from sqlalchemy import select
+
 from proxima.api import create_app
 from proxima.events import EventBus
 from proxima.settings import Settings
 from proxima.store.users import User
-from sqlalchemy import select
 
 
 def _concrete(path: str) -> str:

@@ -11,14 +11,15 @@ from pathlib import Path
 
 import pytest
 from api_helpers import ADMIN, laser_clip, make_settings
+from websockets.exceptions import InvalidStatus
+from websockets.sync.client import connect
+
 from proxima.api import create_app
 from proxima.api.hub import coalesce_key
 from proxima.api.server import BackgroundServer
 from proxima.drone.events import DroneStateEvent
 from proxima.events import CommandEvent, EventBus, PoseEvent
 from proxima.ingest import read_landmark_csv
-from websockets.exceptions import InvalidStatus
-from websockets.sync.client import connect
 
 
 @dataclass

@@ -10,6 +10,7 @@ import numpy as np
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
 from api_helpers import laser_clip
+
 from proxima.ingest import read_landmark_csv
 from proxima.store import migrations
 from proxima.store.base import Base, make_engine, make_sessionmaker

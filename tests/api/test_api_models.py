@@ -7,6 +7,7 @@ from pathlib import Path
 
 import httpx
 from api_helpers import ADMIN, laser_clip
+
 from proxima.api.runtime import build_runtime
 from proxima.api.server import BackgroundServer
 from proxima.settings import Settings

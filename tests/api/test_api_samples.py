@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 from api_helpers import Api, laser_clip
+
 from proxima.api.feed import ReplayPoseFeed
 from proxima.ingest import read_landmark_csv
 from proxima.store.samples import kept_samples

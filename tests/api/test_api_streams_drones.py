@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from api_helpers import Api
+
 from proxima.drone.events import DroneStateEvent
 from proxima.events import ArmingEvent, CommandEvent, GestureEvent, HandoverEvent, StreamEvent
 

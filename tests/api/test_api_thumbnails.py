@@ -8,6 +8,7 @@ import time
 import cv2
 import numpy as np
 from matplotlib import cbook
+
 from proxima.api.thumbnails import ThumbnailTap
 from proxima.events import EventBus
 from proxima.types import Frame
@@ -56,6 +57,7 @@ def test_camera_stream_thumbnails_from_the_live_engine(tmp_path, checkpoint_path
     """A `file:` video stream through the real engine (MediaPipe pose) yields thumbnails
     of its frames; the replayed stream beside it yields none."""
     from api_helpers import laser_clip
+
     from proxima.api.runtime import build_runtime
     from proxima.settings import Settings
 

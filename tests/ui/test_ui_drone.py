@@ -12,9 +12,10 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from ui_helpers import Console, laser_clip, login, screenshot, start_console, wait_for
+
 from proxima.api.feed import ReplayPoseFeed
 from proxima.events import HandoverEvent
-from ui_helpers import Console, laser_clip, login, screenshot, start_console, wait_for
 
 PROXIMA = str(Path(sys.executable).with_name("proxima"))
 

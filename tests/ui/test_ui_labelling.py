@@ -6,9 +6,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ui_helpers import laser_clip, login, screenshot, start_console
+
 from proxima.api.feed import ReplayPoseFeed
 from proxima.store.samples import kept_samples
-from ui_helpers import laser_clip, login, screenshot, start_console
 
 
 def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]

@@ -1,10 +1,51 @@
-"""The Training page: a viewer who tries to start a federated run gets 403."""
+"""The Training page: a supervisor starts a federated run on Flower's deployment engine
+(a local SuperLink and one SuperNode per drone, real processes on 127.0.0.1) and sees
+its curve points appear; a viewer who tries the same gets 403."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from ui_helpers import VIEWER, login, screenshot, start_console
+
+
+def test_start_a_run_and_see_curve_points(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    console = start_console(
+        tmp_path,
+        server={
+            "db_path": str(tmp_path / "c.db"),
+            "models_dir": str(tmp_path / "models"),
+            "viser_enabled": False,
+        },
+    )
+    try:
+        assert console.runtime.training is not None, console.runtime.notes
+        login(page, console.url)
+        page.click("nav a[data-page=training]")
+        page.fill("form.start-run input[name=rounds]", "1")
+        page.fill("form.start-run input[name=local_epochs]", "1")
+        with page.expect_response(
+            lambda r: r.url.endswith("/api/training/runs") and r.request.method == "POST"
+        ) as response:
+            page.click("form.start-run button.start")
+        assert response.value.status == 202, response.value.text()
+        run_id = response.value.json()["id"]
+        page.wait_for_selector(f"table.runs tr[data-run='{run_id}']")
+        # The first point (the global model before any round) arrives from the run.
+        page.wait_for_function(
+            "() => Number(document.querySelector('.chart-points').textContent) > 0",
+            timeout=90000,
+        )
+        page.wait_for_selector(".run-title:has-text('completed')", timeout=120000)
+        page.wait_for_function(
+            "() => Number(document.querySelector('.chart-points').textContent) >= 2"
+        )
+        run = console.runtime.training.get_run(run_id)
+        assert run["status"] == "completed" and [r["round"] for r in run["rounds"]] == [0, 1]
+        page.wait_for_timeout(300)
+        screenshot(page, "training")
+    finally:
+        console.close()
 
 
 def test_viewer_gets_403_on_starting_a_run(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
@@ -20,6 +61,7 @@ def test_viewer_gets_403_on_starting_a_run(page, tmp_path: Path) -> None:  # typ
         assert response.value.status == 403
         page.wait_for_selector(".train-status.error:has-text('Forbidden')")
         assert "viewer" in page.inner_text(".train-status")
+        assert console.runtime.training.list_runs() == []
         screenshot(page, "training-viewer-403")
     finally:
         console.close()

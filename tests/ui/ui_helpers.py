@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+
 from proxima.api.runtime import ConsoleRuntime, build_runtime
 from proxima.api.server import BackgroundServer
 from proxima.settings import Settings

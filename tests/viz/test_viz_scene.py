@@ -6,6 +6,7 @@ import time
 
 import httpx
 import numpy as np
+
 from proxima.drone.events import DroneStateEvent
 from proxima.events import EventBus, HandoverEvent, PoseEvent
 from proxima.ingest import read_landmark_csv

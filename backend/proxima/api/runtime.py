@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import logging
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI
@@ -52,9 +53,12 @@ class ConsoleRuntime:
     drones: Any = None  # proxima.drone.controller.DroneController
     links: dict[str, Any] = field(default_factory=dict)
     view: Any = None  # proxima.viz.scene.FleetView
+    training: Any = None  # proxima.federated.runner.FederatedRunner
     notes: list[str] = field(default_factory=list)
 
     def close(self) -> None:
+        if self.training is not None:
+            self.training.close()
         if self.engine is not None:
             self.engine.stop()
         if self.drones is not None:
@@ -120,6 +124,20 @@ def tap_thumbnails(engine: Any, settings: Settings, bus: EventBus) -> list[str]:
     return tapped
 
 
+def federated_drones(settings: Settings) -> list[Any] | None:
+    """One federated client per configured drone, named like it, so the samples labelled
+    for a drone in the console join that drone's local data; partition i of n (with the
+    default view partition and three drones: one camera view each). None (the runner's
+    default fleet) when fewer than two drones are configured."""
+    if len(settings.drones) < 2:
+        return None
+    from proxima.federated.deploy import Drone
+
+    n = len(settings.drones)
+    db = str(Path(settings.server.db_path).resolve())
+    return [Drone(d.name, i, n, samples_db=db) for i, d in enumerate(settings.drones)]
+
+
 def _start_drones(settings: Settings, bus: EventBus, db: Engine, rt: ConsoleRuntime) -> Any:
     from proxima.drone.controller import DroneController, EmergencyStopService
     from proxima.drone.mavlink_link import MavlinkLink
@@ -149,7 +167,7 @@ def build_runtime(
     drones: bool = True,
     view: bool | None = None,
     realtime: bool = True,
-    training: Any = None,
+    training: bool | None = None,
 ) -> ConsoleRuntime:
     """Start every configured part and build the app (serve it with uvicorn).
 
@@ -188,13 +206,28 @@ def build_runtime(
         except Exception as exc:
             rt.notes.append(f"3D view not started: {type(exc).__name__}: {exc}")
 
-    if training is None:
-        rt.notes.append("no federated training runner: runs cannot be started")
+    runner = None
+    if training if training is not None else settings.training.enabled:
+        try:
+            from proxima.federated.runner import FederatedRunner
+
+            runner = FederatedRunner(
+                settings.server.db_path,
+                settings.server.models_dir,
+                bus=bus,
+                engine=settings.training.engine,
+                drones=federated_drones(settings),
+            )
+            rt.training = runner
+        except Exception as exc:
+            rt.notes.append(f"federated runner not available: {type(exc).__name__}: {exc}")
+    else:
+        rt.notes.append("federated training disabled: runs cannot be started")
 
     rt.app = create_app(
         settings,
         bus,
-        training=training,
+        training=runner,
         estop=estop,
         promoter=promoter,
         viz_port=rt.view.port if rt.view else None,

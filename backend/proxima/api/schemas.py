@@ -97,17 +97,18 @@ class SampleReview(_In):
 
 
 class TrainingStart(_In):
-    """A federated run's parameters (the paper's FedAvg by default)."""
+    """A federated run's parameters; a field left out keeps the runner's default (the
+    paper's sample-weighted FedAvg, one camera view per drone)."""
 
-    rounds: int = Field(5, ge=1, le=500)
-    local_epochs: int = Field(1, ge=1, le=100)
-    batch_size: int = Field(32, ge=1, le=4096)
-    learning_rate: float = Field(1e-3, gt=0, le=1)
-    fraction_fit: float = Field(1.0, gt=0, le=1)
-    min_clients: int = Field(2, ge=1, le=100)
-    strategy: Literal["fedavg", "fedprox", "fedadam", "fedavgm"] = "fedavg"
-    partition: Literal["view", "iid", "dirichlet"] = "view"
-    include_samples: bool = True
+    rounds: int | None = Field(None, ge=1, le=500)
+    local_epochs: int | None = Field(None, ge=1, le=100)
+    batch_size: int | None = Field(None, ge=1, le=4096)
+    learning_rate: float | None = Field(None, gt=0, le=1)
+    fraction_fit: float | None = Field(None, gt=0, le=1)
+    min_clients: int | None = Field(None, ge=1, le=100)
+    strategy: Literal["fedavg", "fedprox", "fedadam", "fedavgm"] | None = None
+    partition: Literal["view", "iid", "dirichlet"] | None = None
+    include_samples: bool | None = None
 
 
 class EstopConfirm(_In):

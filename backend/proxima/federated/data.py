@@ -254,4 +254,5 @@ def drone_data(
                 # Samples are short: all of each trains (validation stays the data set's).
                 out.fit = _concat(fit, make_windows(extra, WINDOW, cfg.stride, cfg.max_gap))
                 out.samples_used = len(extra)
+                out.notes.append(f"{len(extra)} console sample(s) used")
     return out

@@ -79,8 +79,11 @@ function series(chart, name, i) {
 // accuracy, ...}] or {name: {...}}}.
 function clientsOf(r) {
   const c = r.clients || r.per_client || [];
-  if (Array.isArray(c)) return c.map((x) => [x.drone || x.client || x.name || x.node, x]);
-  return Object.entries(c);
+  const rows = Array.isArray(c) ? c : Object.entries(c).map(([drone, m]) => ({ drone, ...m }));
+  // Each drone's own training result of the round (not a failed or federated-evaluation row).
+  return rows
+    .filter((x) => (x.phase ?? "train") === "train" && (x.status ?? "ok") === "ok")
+    .map((x) => [x.drone || x.client || x.name, x]);
 }
 
 function addRound(r) {
@@ -119,6 +122,7 @@ async function showRun(id) {
 
 async function refreshRuns() {
   const runs = await api("/training/runs");
+  if (selected === null && runs.length) showRun(runs[0].id);
   q("table.runs tbody").replaceChildren(
     ...runs.map((r) => {
       const tr = el(
@@ -129,7 +133,7 @@ async function refreshRuns() {
         el("td", { text: r.started_at ? new Date(r.started_at * 1000).toLocaleString() : "" }),
         el("td", { text: String(r.params?.rounds ?? r.rounds_total ?? "") }),
         el("td", { text: typeof r.final_accuracy === "number" ? r.final_accuracy.toFixed(3) : "" }),
-        el("td", { text: r.checkpoint || "" }),
+        el("td", { text: r.checkpoint ? r.checkpoint.split("/").pop() : "" }),
       );
       tr.addEventListener("click", () => showRun(r.id));
       return tr;
@@ -196,11 +200,15 @@ async function startRun(ev) {
 }
 
 function number(name, value, attrs = {}) {
-  return el("label", {}, `${name.replace("_", " ")} `, el("input", { name, type: "number", value: String(value), ...attrs }));
+  const v = session.config.training_defaults?.[name] ?? value;
+  return el("label", {}, `${name.replace("_", " ")} `, el("input", { name, type: "number", value: String(v), ...attrs }));
 }
 
 function choice(name, options) {
-  return el("label", {}, `${name} `, el("select", { name }, ...options.map((o) => el("option", { value: o, text: o }))));
+  const select = el("select", { name }, ...options.map((o) => el("option", { value: o, text: o })));
+  const v = session.config.training_defaults?.[name];
+  if (v) select.value = v;
+  return el("label", {}, `${name} `, select);
 }
 
 export function mount(container) {
@@ -273,8 +281,12 @@ export function mount(container) {
     offs.push(
       on(type, (msg) => {
         const run = msg.run_id ?? msg.run;
-        if (run === selected) q(".run-title").textContent = `Run ${run}: ${msg.status || msg.state || ""}`;
+        if (run === selected) {
+          const detail = msg.detail ? ` (${msg.detail})` : "";
+          q(".run-title").textContent = `Run ${run}: ${msg.status || ""}${detail}`;
+        }
         refreshRuns();
+        if (msg.status === "completed") refreshModels();
       }),
     );
   }

@@ -14,6 +14,27 @@ from proxima.types import GESTURES
 router = APIRouter(tags=["config"])
 
 
+TRAINING_FORM = (
+    "rounds",
+    "local_epochs",
+    "batch_size",
+    "learning_rate",
+    "fraction_fit",
+    "min_clients",
+    "strategy",
+    "partition",
+    "include_samples",
+)
+
+
+def _training_defaults(runner: Any) -> dict[str, Any]:
+    """The runner's defaults for the fields of the Training page's form."""
+    defaults = getattr(runner, "defaults", None)
+    if defaults is None:
+        return {}
+    return {k: getattr(defaults, k) for k in TRAINING_FORM if hasattr(defaults, k)}
+
+
 @router.get("/config")
 def get_config(user: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
     s = console.settings
@@ -27,6 +48,7 @@ def get_config(user: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
         ],
         "drones": [d.name for d in s.drones],
         "training_available": console.training is not None,
+        "training_defaults": _training_defaults(console.training),
         "estop_available": console.estop is not None,
     }
 

@@ -37,7 +37,8 @@ def list_runs(_: CurrentUser, console: ConsoleDep) -> list[dict[str, Any]]:
 def start_run(body: TrainingStart, user: SupervisorUser, console: ConsoleDep) -> dict[str, Any]:
     runner = _runner(console)
     try:
-        run_id = runner.start_run({**body.model_dump(), "started_by": user.username})
+        params = body.model_dump(exclude_none=True)
+        run_id = runner.start_run({**params, "started_by": user.username})
     except ValueError as exc:
         raise HTTPException(status.HTTP_422_UNPROCESSABLE_CONTENT, str(exc)) from None
     except RuntimeError as exc:  # e.g. a run is already going

@@ -1,0 +1,181 @@
+"""One clock for replayed streams and simulated vehicles.
+
+Replays can run far faster than real time, and every decision of the engine uses stream
+time, so a replay decides the same at any speed. Simulated vehicles fly at real time.
+`FlightClock` joins the two without making stream time depend on the machine's speed
+more than it must:
+
+1. **Lock-step.** Before a stream's next frame goes to recognition, the engine's
+   decision path must have decided that stream's previous frame, and every command it
+   published must have been answered by the drone controller (mapped, checked, sent,
+   acknowledged). So a command decided at stream time t reaches the vehicle before any
+   frame after t is looked at.
+2. **Real time while something flies.** While a vehicle executes a command (a move, a
+   hold, a landing: from the controller's "sent" until its outcome "reached", "landed",
+   ...), frames are paced to the wall clock, anchored where the motion began: the
+   camera views see the drone where it really is at that stream time. When every
+   vehicle is still, frames run flat out (a hovering simulator does not change, so
+   nothing is lost by skipping its real time).
+3. **The end waits.** A stream's last frame waits until no vehicle is moving, so a
+   landing completes before the replay ends.
+
+`now()` is the newest stream time let through, the scenario's time; the safety rules'
+clock (rate limit, operator watchdog) runs on it too, so compressed idle stretches do
+not look like a burst of commands.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from proxima.drone.events import CommandResultEvent
+from proxima.events import CommandEvent, EventBus
+from proxima.types import Event, Frame
+
+
+class FlightClock:
+    """Coordinates stream time with vehicles flying at real time (see the module)."""
+
+    def __init__(self, answer_timeout_s: float = 15.0, motion_timeout_s: float = 90.0) -> None:
+        self.answer_timeout_s = answer_timeout_s
+        self.motion_timeout_s = motion_timeout_s
+        self._cond = threading.Condition()
+        self._now = 0.0
+        self._anchor: tuple[float, float] | None = None  # (stream t, wall) of real-time pacing
+        self._issued = 0
+        self._answered = 0
+        self._moving: dict[tuple[str, int | None, str], float] = {}
+        self._prev_t: dict[str, float] = {}
+        self.realtime_s = 0.0  # stream seconds that ran at real time
+        self.problems: list[str] = []
+
+    # --- time ---------------------------------------------------------------------------
+    def now(self) -> float:
+        """The scenario's time: the newest stream time let through."""
+        with self._cond:
+            return self._now
+
+    def moving(self) -> bool:
+        """Whether a vehicle is executing a command right now."""
+        with self._cond:
+            return bool(self._moving)
+
+    # --- what the drone controller does -------------------------------------------------
+    def watch(self, bus: EventBus) -> None:
+        """Follow the commands and their results on `bus`."""
+        bus.add_listener(self._on_event)
+
+    def _on_event(self, event: Event) -> None:
+        if isinstance(event, CommandEvent):
+            with self._cond:
+                self._issued += 1
+        elif isinstance(event, CommandResultEvent):
+            key = (event.drone, event.log_id, event.command)
+            with self._cond:
+                if event.status != "done":
+                    self._answered += 1
+                if event.status == "sent" and not event.outcome:
+                    self._moving[key] = self._now  # tracked until its outcome comes
+                elif event.status == "done":
+                    self._moving.pop(key, None)
+                self._cond.notify_all()
+
+    def _wait_for(self, predicate: Callable[[], bool], timeout: float, what: str) -> bool:
+        with self._cond:
+            if self._cond.wait_for(predicate, timeout):
+                return True
+            self.problems.append(f"t={self._now:.2f}s: gave up waiting {timeout:.0f} s for {what}")
+            return False
+
+    def settle(self, timeout: float | None = None) -> bool:
+        """Wait until every command was answered and no vehicle moves (wall seconds)."""
+        timeout = self.motion_timeout_s if timeout is None else timeout
+        return self._wait_for(
+            lambda: self._answered >= self._issued and not self._moving,
+            timeout,
+            "the vehicles to answer and stop",
+        )
+
+    # --- the gate in front of each stream ------------------------------------------------
+    def gate(self, stream: str, t: float, decided: Callable[[], float], last: bool) -> None:
+        """Called before frame `t` of `stream` is recognised; blocks as the module says.
+        `decided()` is the stream time up to which the engine has decided."""
+        prev = self._prev_t.get(stream)
+        if prev is not None:
+            deadline = time.monotonic() + self.answer_timeout_s
+            while decided() < prev:
+                if time.monotonic() > deadline:
+                    with self._cond:
+                        self.problems.append(f"{stream} t={t:.2f}s: decisions stalled")
+                    break
+                time.sleep(0.0002)
+        self._prev_t[stream] = t
+        self._wait_for(
+            lambda: self._answered >= self._issued,
+            self.answer_timeout_s,
+            "the drone controller to answer a command",
+        )
+        if last:
+            self._wait_for(lambda: not self._moving, self.motion_timeout_s, "a vehicle to stop")
+        with self._cond:
+            if self._moving:
+                if self._anchor is None:
+                    self._anchor = (max(self._now, t), time.monotonic())
+                delay = self._anchor[1] + (t - self._anchor[0]) - time.monotonic()
+            else:
+                if self._anchor is not None:
+                    self.realtime_s += max(self._now - self._anchor[0], 0.0)
+                self._anchor = None
+                delay = 0.0
+        if delay > 0:
+            time.sleep(delay)
+        with self._cond:
+            self._now = max(self._now, t)
+
+
+def install_gate(
+    engine: Any,
+    clock: FlightClock,
+    frames: dict[str, int],
+    views: dict[str, Callable[[Frame], Frame]] | None = None,
+) -> None:
+    """Put `clock`'s gate (and the stream's camera view, if any) in front of every
+    stream of a started `proxima.engine.Engine`: each frame waits at the gate, is seen
+    through the view, then goes through the stream's own pipeline unchanged.
+
+    `frames[name]` is the stream's frame count, so its last frame is known. The engine
+    has no frame hook, so each pipeline's `process` is wrapped (as the console's
+    thumbnail tap does); a stream cannot decide anything before its 60-frame window is
+    full, so frames that may pass before the wrapper is in place change nothing.
+    """
+    views = views or {}
+    controller = engine.controller
+
+    def decided() -> float:
+        return float(controller.now)
+
+    for name, pipeline in engine.pipelines.items():
+        original = pipeline.process
+        view = views.get(name)
+        total = frames.get(name)
+        count = [0]
+
+        def process(
+            frame: Frame,
+            _name: str = name,
+            _original: Callable[[Frame], Any] = original,
+            _view: Callable[[Frame], Frame] | None = view,
+            _total: int | None = total,
+            _count: list[int] = count,
+        ) -> Any:
+            _count[0] += 1
+            last = _total is not None and _count[0] >= _total
+            clock.gate(_name, frame.t, decided, last)
+            if _view is not None:
+                frame = _view(frame)
+            return _original(frame)
+
+        pipeline.process = process

@@ -1,0 +1,100 @@
+"""Run config, partitions, console samples and update screening: real data, no engine."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pytest
+from conftest import fast_config
+from flwr.app import Array, ArrayRecord, MetricRecord, RecordDict
+
+from proxima.federated.config import APP_DIR, ConfigError, FLConfig
+from proxima.federated.data import drone_data, partition_windows, sample_clips
+from proxima.federated.strategy import check_update
+from proxima.federated.task import new_model
+
+
+def test_flower_app_defaults_match_the_config() -> None:
+    toml = tomllib.loads((APP_DIR / "pyproject.toml").read_text())
+    assert toml["tool"]["flwr"]["app"]["config"] == FLConfig().to_run_config()
+    comps = toml["tool"]["flwr"]["app"]["components"]
+    assert comps == {"serverapp": "proxima.federated.server_app:app",
+                     "clientapp": "proxima.federated.client_app:app"}  # fmt: skip
+
+
+def test_bad_run_config_names_the_key() -> None:
+    with pytest.raises(ConfigError, match="'local-epochs'"):
+        FLConfig.from_run_config({"local-epochs": "many"})
+    with pytest.raises(ConfigError, match="'strategy'"):
+        FLConfig.from_run_config({"strategy": "fedsgd"})
+    with pytest.raises(ConfigError, match="'rounds-x'"):
+        FLConfig.from_run_config({"rounds-x": 3})
+    with pytest.raises(ConfigError, match="'pipeline'.*scale-free"):
+        FLConfig(pipeline="paper")  # MinMax statistics would be per drone
+    cfg = FLConfig.from_run_config({"rounds": 7, "include-samples": "false", "strategy": "fedprox"})
+    assert (cfg.rounds, cfg.include_samples, cfg.strategy) == (7, False, "fedprox")
+
+
+def test_view_partition_gives_each_drone_one_camera_view(laser_clips) -> None:
+    cfg = fast_config()
+    names = []
+    for pid, view in enumerate("flr"):
+        fit, val = partition_windows(cfg, pid, laser_clips)
+        assert len(fit) > 100 and len(val) > 0
+        assert {n.rsplit("_", 1)[1] for n in fit.clip_names} == {view}
+        assert set(np.unique(fit.labels)) == set(range(13))  # every gesture, one view
+        names.append(set(fit.clip_names))
+    assert not (names[0] & names[1]) and not (names[1] & names[2])
+
+
+@pytest.mark.parametrize("partition", ["iid", "dirichlet"])
+def test_window_partitions_are_disjoint_and_complete(laser_clips, partition) -> None:
+    cfg = fast_config(partition=partition, dirichlet_alpha=0.3)
+    shares = [partition_windows(cfg, pid, laser_clips)[0] for pid in range(3)]
+    whole = partition_windows(FLConfig(**{**cfg.__dict__, "num_drones": 1}), 0, laser_clips)[0]
+    assert sum(len(s) for s in shares) == len(whole)
+    keys = [{(int(c), float(x)) for c, x in zip(s.clip, s.xyz[:, 0, 0, 0], strict=True)}
+            for s in shares]  # fmt: skip
+    assert not (keys[0] & keys[1]) and not (keys[0] & keys[2]) and not (keys[1] & keys[2])
+    counts = np.array([np.bincount(s.labels, minlength=13) for s in shares])
+    if partition == "iid":
+        assert (counts.max(0) - counts.min(0) <= 1).all()  # every class dealt evenly
+    else:
+        assert (counts.max(0) - counts.min(0) > 5).any()  # skewed by Dirichlet
+
+
+def test_corrupt_sample_is_reported_and_skipped(sample_store) -> None:
+    db, good, bad = sample_store
+    clips, notes = sample_clips(db, "front")
+    assert [c.name for c in clips] == [f"sample-{good}"]
+    assert len(notes) == 1 and notes[0].startswith(f"sample {bad} skipped")
+    assert sample_clips(db, "left") == ([], [])
+    cfg = fast_config(include_samples=True)
+    with_samples = drone_data(cfg, 0, "front", None, db)
+    without = drone_data(fast_config(), 0, "front", None, db)
+    assert with_samples.samples_used == 1
+    assert len(with_samples.fit) > len(without.fit)
+    assert any(f"sample {bad} skipped" in n for n in with_samples.notes)
+
+
+def _reply(arrays: dict[str, np.ndarray], n: float = 100) -> RecordDict:
+    metrics = {"num-examples": n, "train_loss": 1.0, "val_loss": 1.0, "val_accuracy": 0.5,
+               "seconds": 1.0}  # fmt: skip
+    return RecordDict({"arrays": ArrayRecord({k: Array(v) for k, v in arrays.items()}),
+                       "metrics": MetricRecord(metrics)})  # fmt: skip
+
+
+def test_updates_that_would_poison_the_average_are_rejected() -> None:
+    model, _ = new_model(FLConfig())
+    weights = {k: v.numpy().copy() for k, v in model.state_dict().items()}
+    reference = {k: tuple(v.shape) for k, v in weights.items()}
+    assert check_update(_reply(weights), reference) is None
+    first = next(iter(weights))
+    nan = {**weights, first: np.full_like(weights[first], np.nan)}
+    assert "non-finite" in check_update(_reply(nan), reference)
+    wrong = {**weights, first: np.zeros((3, 3), np.float32)}
+    assert "shape" in check_update(_reply(wrong), reference)
+    missing = {k: v for k, v in weights.items() if k != first}
+    assert "missing" in check_update(_reply(missing), reference)
+    assert "num-examples" in check_update(_reply(weights, n=0), reference)
