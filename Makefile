@@ -22,9 +22,11 @@ install: $(STAMP)
 
 frontend: $(FRONT_STAMP)
 
-$(FRONT_STAMP): $(wildcard frontend/package.json frontend/src/* frontend/*.html frontend/*.js)
+FRONT_SRC := $(shell find frontend -path frontend/node_modules -prune -o -type f -print 2>/dev/null)
+
+$(FRONT_STAMP): $(FRONT_SRC)
 	@if [ -f frontend/package.json ]; then \
-		cd frontend && npm install --no-audit --no-fund && npm run build && touch ../$(FRONT_STAMP); \
+		cd frontend && npm ci --no-audit --no-fund && npm run build && touch ../$(FRONT_STAMP); \
 	else mkdir -p static && touch $(FRONT_STAMP); fi
 
 demo: install frontend

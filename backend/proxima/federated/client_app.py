@@ -10,7 +10,7 @@ with the drone's name and notes (e.g. a corrupt sample it skipped).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from flwr.app import ArrayRecord, ConfigRecord, Context, Message, MetricRecord, RecordDict
 from flwr.clientapp import ClientApp
@@ -61,6 +61,8 @@ def _local(msg: Message, context: Context) -> tuple[FLConfig, Node, DroneData]:
     samples can change between runs, so the run id is part of the key)."""
     cfg = config_of(msg)
     node = Node.from_context(context, cfg)
+    if node.num_partitions != cfg.num_drones:  # the federation decides how many share
+        cfg = replace(cfg, num_drones=node.num_partitions)
     key = "|".join(
         str(getattr(cfg, k))
         for k in (

@@ -32,6 +32,7 @@ class FLConfig:
     local_epochs: int = 2
     batch_size: int = 64
     learning_rate: float = 2e-3
+    lr_decay: float = 1.0  # local learning rate x lr_decay per round (1 = constant)
     fraction_fit: float = 1.0
     fraction_evaluate: float = 0.0  # federated evaluation of the global model on drones
     min_clients: int = 2
@@ -73,6 +74,7 @@ class FLConfig:
         need(self.local_epochs >= 1, "local_epochs", "must be at least 1")
         need(self.batch_size >= 1, "batch_size", "must be at least 1")
         need(0 < self.learning_rate <= 1, "learning_rate", "must be in (0, 1]")
+        need(0 < self.lr_decay <= 1, "lr_decay", "must be in (0, 1]")
         need(0 < self.fraction_fit <= 1, "fraction_fit", "must be in (0, 1]")
         need(0 <= self.fraction_evaluate <= 1, "fraction_evaluate", "must be in [0, 1]")
         need(self.min_clients >= 1, "min_clients", "must be at least 1")

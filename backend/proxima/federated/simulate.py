@@ -2,8 +2,9 @@
 
 The engine is Flower's Ray backend. On a small machine its defaults cost more than
 training (a 5-round run took 204 s, and Ray's driver peaked at 4.4 GB), so the backend
-is sized here: one CPU per client actor, as many actors as cores (and no more than
-drones), a small object store, no dashboard, and torch limited to one thread per client.
+is sized here: one single-threaded actor per drone (three drones on two cores share
+them evenly, where two actors would make every round wait for one actor's second
+drone), a small object store, no dashboard, and torch limited to one thread per client.
 """
 
 from __future__ import annotations
@@ -31,8 +32,8 @@ def new_run_id() -> str:
 
 
 def backend_config(cfg: FLConfig, cpus: int | None = None) -> dict[str, dict[str, Any]]:
-    """Ray sized for this machine: one CPU per client actor, min(cores, drones) actors."""
-    cpus = max(1, min(cpus or os.cpu_count() or 1, cfg.num_drones))
+    """Ray with one single-threaded actor per drone (`cpus` caps the actors)."""
+    cpus = max(1, min(cpus or cfg.num_drones, cfg.num_drones))
     return {
         "client_resources": {"num_cpus": 1, "num_gpus": 0.0},
         "init_args": {

@@ -91,13 +91,15 @@ def train_local(
 ) -> LocalResult:
     """The paper's local step: `local_epochs` epochs of the centralised loop (AdamW,
     ReduceLROnPlateau, early stopping with best weights, gradient clipping), seeded per
-    round and drone, with FedProx's proximal term when the strategy asks for it."""
+    round and drone, with FedProx's proximal term when the strategy asks for it. The
+    starting learning rate decays by `lr_decay` per round, standing in for the decay the
+    centralised run's ReduceLROnPlateau brings over many epochs."""
     t0 = time.perf_counter()
     tc = TrainConfig(
         epochs=cfg.local_epochs,
         patience=cfg.patience,
         batch_size=cfg.batch_size,
-        lr=cfg.learning_rate,
+        lr=cfg.learning_rate * cfg.lr_decay ** max(server_round - 1, 0),
         seed=cfg.seed + 1000 * server_round + partition_id,
         stride=cfg.stride,
         max_gap=cfg.max_gap,

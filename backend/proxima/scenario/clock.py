@@ -49,8 +49,27 @@ class FlightClock:
         self._answered = 0
         self._moving: dict[tuple[str, int | None, str], float] = {}
         self._prev_t: dict[str, float] = {}
+        self._vehicles: list[Any] = []  # DroneLinks whose motion keeps real time
+        self.still_speed_m_s = 0.05
         self.realtime_s = 0.0  # stream seconds that ran at real time
         self.problems: list[str] = []
+
+    def track_vehicles(self, links: Any) -> None:
+        """Also run at real time while any of these vehicles moves (a command's outcome
+        "reached" comes within a tolerance, before the vehicle has settled)."""
+        self._vehicles.extend(links)
+
+    def _vehicle_moving(self) -> bool:
+        for link in self._vehicles:
+            tel = link.telemetry()
+            if tel is None or tel.velocity is None or not tel.flying:
+                continue
+            if sum(v * v for v in tel.velocity) ** 0.5 > self.still_speed_m_s:
+                return True
+        return False
+
+    def _busy(self) -> bool:  # call with self._cond held
+        return bool(self._moving) or self._vehicle_moving()
 
     # --- time ---------------------------------------------------------------------------
     def now(self) -> float:
@@ -59,9 +78,9 @@ class FlightClock:
             return self._now
 
     def moving(self) -> bool:
-        """Whether a vehicle is executing a command right now."""
+        """Whether a vehicle is executing a command or still moving right now."""
         with self._cond:
-            return bool(self._moving)
+            return self._busy()
 
     # --- what the drone controller does -------------------------------------------------
     def watch(self, bus: EventBus) -> None:
@@ -75,26 +94,32 @@ class FlightClock:
         elif isinstance(event, CommandResultEvent):
             key = (event.drone, event.log_id, event.command)
             with self._cond:
-                if event.status != "done":
-                    self._answered += 1
-                if event.status == "sent" and not event.outcome:
-                    self._moving[key] = self._now  # tracked until its outcome comes
-                elif event.status == "done":
-                    self._moving.pop(key, None)
+                if event.status == "done" and key in self._moving:
+                    del self._moving[key]  # the outcome of a tracked command
+                else:
+                    self._answered += 1  # the controller's answer to a command
+                    if event.status == "sent" and not event.outcome:
+                        self._moving[key] = self._now  # tracked until its outcome comes
                 self._cond.notify_all()
 
     def _wait_for(self, predicate: Callable[[], bool], timeout: float, what: str) -> bool:
+        deadline = time.monotonic() + timeout
         with self._cond:
-            if self._cond.wait_for(predicate, timeout):
-                return True
-            self.problems.append(f"t={self._now:.2f}s: gave up waiting {timeout:.0f} s for {what}")
-            return False
+            while not predicate():  # polled too: vehicles move without notifying
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    self.problems.append(
+                        f"t={self._now:.2f}s: gave up waiting {timeout:.0f} s for {what}"
+                    )
+                    return False
+                self._cond.wait(min(remaining, 0.02))
+            return True
 
     def settle(self, timeout: float | None = None) -> bool:
         """Wait until every command was answered and no vehicle moves (wall seconds)."""
         timeout = self.motion_timeout_s if timeout is None else timeout
         return self._wait_for(
-            lambda: self._answered >= self._issued and not self._moving,
+            lambda: self._answered >= self._issued and not self._busy(),
             timeout,
             "the vehicles to answer and stop",
         )
@@ -119,9 +144,9 @@ class FlightClock:
             "the drone controller to answer a command",
         )
         if last:
-            self._wait_for(lambda: not self._moving, self.motion_timeout_s, "a vehicle to stop")
+            self._wait_for(lambda: not self._busy(), self.motion_timeout_s, "a vehicle to stop")
         with self._cond:
-            if self._moving:
+            if self._busy():
                 if self._anchor is None:
                     self._anchor = (max(self._now, t), time.monotonic())
                 delay = self._anchor[1] + (t - self._anchor[0]) - time.monotonic()

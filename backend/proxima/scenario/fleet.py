@@ -70,10 +70,11 @@ class SimProcess:
     def alive(self) -> bool:
         return self.proc.poll() is None
 
-    def stop(self, timeout: float = 5.0) -> int:
-        """SIGTERM by PID, wait, SIGKILL if it is still there; the exit code."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
+    def stop(self, timeout: float = 5.0, signal_first: bool = True) -> int:
+        """SIGTERM by PID (once), wait, SIGKILL if it is still there; the exit code."""
+        if signal_first and self.proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                self.proc.send_signal(signal.SIGTERM)
         try:
             return self.proc.wait(timeout)
         except subprocess.TimeoutExpired:
@@ -122,7 +123,7 @@ def stop_all(sims: Sequence[SimProcess], timeout: float = 5.0) -> dict[str, int]
         if sim.alive():
             with contextlib.suppress(ProcessLookupError):
                 sim.proc.send_signal(signal.SIGTERM)
-    return {sim.name: sim.stop(timeout) for sim in sims}
+    return {sim.name: sim.stop(timeout, signal_first=False) for sim in sims}
 
 
 def take_off(link: DroneLink, altitude_m: float, timeout: float = 20.0) -> Telemetry:

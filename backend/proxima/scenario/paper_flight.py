@@ -161,6 +161,10 @@ def run_paper_flight(
         EXPECTED,
         tolerance_m=cfg.land_tolerance_m,
         problems=rig.clock.problems,
+        truth={
+            name: [dict(seg) for seg in streams[view].truth()["segments"]]
+            for name, view in zip(("main", "secondary"), views, strict=True)
+        },
     )
     states["main"]["expected_landing_ned"] = [round(expected_end[0], 3), round(expected_end[1], 3), 0.0]
     return {

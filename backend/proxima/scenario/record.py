@@ -44,6 +44,7 @@ class TimelineRecorder:
         self.entries: list[dict[str, Any]] = []
         self._runs: dict[str, dict[str, Any]] = {}  # open gesture run per stream
         self._last_action: dict[str, str] = {}
+        self._tracked: set[tuple[str, str, int | None, str]] = set()  # awaiting an outcome
 
     def attach(self, bus: EventBus, scope: str = "") -> None:
         """Record the events of `bus`; `scope` (e.g. the drone a bus belongs to) is added
@@ -122,8 +123,13 @@ class TimelineRecorder:
                 "command": e.command,
                 "action": e.action,
             }
-            if e.status == "done":
-                return {**common, "kind": "outcome", "outcome": e.outcome}
+            key = (scope, e.drone, e.log_id, e.command)
+            with self._lock:
+                if e.status == "done" and key in self._tracked:
+                    self._tracked.discard(key)
+                    return {**common, "kind": "outcome", "outcome": e.outcome}
+                if e.status == "sent" and not e.outcome:
+                    self._tracked.add(key)
             return {
                 **common,
                 "kind": "ack",

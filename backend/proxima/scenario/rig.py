@@ -127,6 +127,7 @@ class Rig:
             ok = link.wait_for(lambda t: t.position is not None and t.landed != "unknown", 10.0)
             if ok is None:
                 raise ScenarioError(f"{spec.name}: no position telemetry from the simulator")
+        self.clock.track_vehicles(self.links.values())
         self.paths = PathRecorder(self.links, self._path_time).start()
 
     def _path_time(self) -> float | None:

@@ -94,16 +94,51 @@ def commands_before_arming(timeline: Sequence[dict[str, Any]]) -> list[dict[str,
     return bad
 
 
+ARMING = "have_command"
+
+
+def collapse_rearms(commands: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """Split gesture commands into the sequence and the repeats of `have_command` that
+    follow a `have_command` from the same stream (the operator still performing it after
+    the debounce's release time: arming again sends nothing to a vehicle)."""
+    kept: list[dict[str, Any]] = []
+    repeats: list[dict[str, Any]] = []
+    for c in commands:
+        prev = kept[-1] if kept else None
+        if (
+            prev is not None
+            and c["command"] == ARMING
+            and prev["command"] == ARMING
+            and prev["stream"] == c["stream"]
+        ):
+            repeats.append(c)
+        else:
+            kept.append(c)
+    return kept, repeats
+
+
+def performed_at(segments: Sequence[dict[str, Any]], t: float, latency_s: float) -> set[str]:
+    """Gestures the operator performed at stream time `t`, or finished at most
+    `latency_s` before it (a command follows its gesture by the recognition latency)."""
+    return {s["gesture"] for s in segments if s["transition_t"] <= t <= s["end_t"] + latency_s}
+
+
 def check_sequence(
     verdict: Verdict,
     timeline: Sequence[dict[str, Any]],
     expected: Sequence[tuple[str, str]],
     drone: str,
+    truth: dict[str, Sequence[dict[str, Any]]] | None = None,
+    latency_s: float = 3.0,
     label: str = "",
 ) -> None:
-    """Exactly the `expected` (command, stream) gesture commands, in order, all to `drone`,
-    none sent before arming, and every one answered by the vehicle side as intended."""
-    got = [(c["command"], c["stream"]) for c in gesture_commands(timeline)]
+    """No wrong command: exactly the `expected` (command, stream) gesture commands in
+    order (a repeated `have_command` during the same performance is noted, not counted),
+    each one the gesture the operator was performing (per the stitched `truth`), all to
+    `drone`, none before arming, every one carried out by the vehicle side."""
+    commands = gesture_commands(timeline)
+    kept, repeats = collapse_rearms(commands)
+    got = [(c["command"], c["stream"]) for c in kept]
     shown = ", ".join(f"{c}@{s}" for c, s in got) or "none"
     want = ", ".join(f"{c}@{s}" for c, s in expected)
     verdict.check(
@@ -111,7 +146,24 @@ def check_sequence(
         f"{label}gesture commands as performed: {shown}",
         f"{label}gesture commands {shown}; expected exactly {want}",
     )
-    wrong_drone = [c for c in gesture_commands(timeline) if c["drone"] != drone]
+    for r in repeats:
+        verdict.note(
+            f"{label}have_command repeated at t={r['t']} s by {r['stream']} while the operator "
+            "still performed it (after the debounce's release time): it re-arms, nothing "
+            "is sent to a vehicle"
+        )
+    if truth is not None:
+        wrong = []
+        for c in commands:
+            segments = truth.get(c["stream"])
+            if segments is not None and c["command"] not in performed_at(segments, c["t"], latency_s):
+                wrong.append(f"{c['command']}@{c['stream']} t={c['t']}")
+        verdict.check(
+            not wrong,
+            f"{label}every command is the gesture the operator was performing",
+            f"{label}commands the operator did not perform: {', '.join(wrong)}",
+        )
+    wrong_drone = [c for c in commands if c["drone"] != drone]
     verdict.check(
         not wrong_drone,
         f"{label}every command went to {drone}",
@@ -129,10 +181,11 @@ def check_sequence(
         for a in acks
         if a["status"] not in ("sent", "done")
     ]
+    missing = len(commands) - len(acks)
     verdict.check(
-        not failed,
-        f"{label}every gesture command was accepted by the vehicle side",
-        f"{label}commands not carried out: {'; '.join(failed)}",
+        not failed and missing == 0,
+        f"{label}every gesture command was carried out by the vehicle side",
+        f"{label}commands not carried out: {'; '.join(failed) or f'{missing} unanswered'}",
     )
 
 
@@ -192,6 +245,7 @@ def judge_paper_flight(
     secondary: str = "secondary",
     tolerance_m: float = 0.3,
     problems: Sequence[str] = (),
+    truth: dict[str, Sequence[dict[str, Any]]] | None = None,
 ) -> Verdict:
     """The paper-flight verdict: the main drone landed at the expected place, exactly one
     handover (main -> secondary) happened, no command came before arming and no wrong
@@ -206,7 +260,7 @@ def judge_paper_flight(
         f"exactly one handover: {shown}",
         f"expected exactly one handover {main}->{secondary}, got {len(hands)}: {shown or 'none'}",
     )
-    check_sequence(v, timeline, expected, main)
+    check_sequence(v, timeline, expected, main, truth)
     landed_t = next(
         (o["t"] for o in entries(timeline, "outcome") if o.get("outcome") == "landed"), None
     )
