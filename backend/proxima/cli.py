@@ -31,6 +31,12 @@ def _register_all() -> None:
     from proxima.federated import commands as federated_commands
 
     federated_commands.register(app)
+    from proxima.scenario import commands as scenario_commands
+
+    scenario_commands.register(app)
+    from proxima.demo import commands as demo_commands
+
+    demo_commands.register(app)
 
 
 _register_all()

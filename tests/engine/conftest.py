@@ -21,6 +21,7 @@ def checkpoint() -> Path:
 @pytest.fixture(scope="session")
 def classifier(checkpoint: Path):
     import torch
+
     from proxima.engine import load_classifier
 
     torch.set_num_threads(1)

@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+
 from proxima.control import ControlSettings
 from proxima.engine import Engine, JsonlWriter, StreamSpec
 from proxima.engine.stitch import Blank, stitch_views

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+
 from proxima.engine.stitch import stitch_views
 
 # move_ahead and move_upward are performed while disarmed and must give no command.
@@ -82,8 +83,9 @@ def test_commands_follow_the_script_and_never_come_before_arming(
 
 
 def test_bad_inputs_give_clear_errors(checkpoint, tmp_path) -> None:
-    from proxima.cli import app
     from typer.testing import CliRunner
+
+    from proxima.cli import app
 
     def run(*args: str | Path):
         return CliRunner().invoke(app, ["recognize", *map(str, args)])

@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+
 from proxima.engine.stitch import (
     Blank,
     StitchError,
@@ -71,3 +72,47 @@ def test_bad_requests_say_what_is_wrong(laser_clips) -> None:
         parse_blank("1:2", "hands")
     with pytest.raises(StitchError, match="no clip of 'hover' in view"):
         stitch_views(laser_clips, [("hover", 2.0)], views=("x",))
+
+
+def test_stitch_command_writes_one_stream_per_view(laser_dir, tmp_path) -> None:
+    from typer.testing import CliRunner
+
+    from proxima.cli import app
+
+    args = [
+        "stitch",
+        "--out",
+        str(tmp_path / "s.csv"),
+        "--script",
+        "have_command:3,hover:3",
+        "--view",
+        "f",
+        "--view",
+        "r",
+        "--blank",
+        "f:feet:1:2",
+        "--data",
+        str(laser_dir),
+    ]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    for view in ("f", "r"):
+        truth = json.loads((tmp_path / f"s.{view}.truth.json").read_text())
+        assert [s["gesture"] for s in truth["segments"]] == ["have_command", "hover"]
+        assert truth["view"] == view and truth["part"] == "test"
+    assert json.loads((tmp_path / "s.f.truth.json").read_text())["blanks"][0]["kind"] == "feet"
+    bad = CliRunner().invoke(
+        app,
+        [
+            "stitch",
+            "--out",
+            str(tmp_path / "b.csv"),
+            "--script",
+            "hover:3",
+            "--blank",
+            "r:feet:1:2",
+            "--data",
+            str(laser_dir),
+        ],
+    )
+    assert bad.exit_code == 2 and "VIEW:KIND:START:END" in bad.output

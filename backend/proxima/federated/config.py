@@ -29,7 +29,7 @@ class FLConfig:
     """Everything one federated run needs besides the drones themselves."""
 
     rounds: int = 5
-    local_epochs: int = 2
+    local_epochs: int = 1
     batch_size: int = 64
     learning_rate: float = 2e-3
     lr_decay: float = 1.0  # local learning rate x lr_decay per round (1 = constant)
@@ -47,7 +47,7 @@ class FLConfig:
     include_samples: bool = True
     model: str = "tcn"
     pipeline: str = "body"
-    stride: int = 3  # frames between training windows
+    stride: int = 4  # frames between training windows (as centralised training)
     test_stride: int = 3  # frames between held-out test windows
     max_gap: int = 5
     patience: int = 12  # local early stopping (epochs without a better validation loss)

@@ -172,6 +172,7 @@ def partition_windows(
 def sample_clips(db_path: str | Path, drone: str) -> tuple[list[Clip], list[str]]:
     """The drone's kept samples from the console's store as clips, plus one note per
     sample that had to be skipped (the run goes on without it)."""
+    from sqlalchemy import inspect
     from sqlalchemy.exc import SQLAlchemyError
 
     from proxima.store.base import make_engine, make_sessionmaker
@@ -181,6 +182,8 @@ def sample_clips(db_path: str | Path, drone: str) -> tuple[list[Clip], list[str]
     notes: list[str] = []
     engine = make_engine(db_path)
     try:
+        if not inspect(engine).has_table("samples"):
+            return clips, notes  # a console database without labelled samples yet
         with make_sessionmaker(engine)() as db:
             rows = list_samples(db, drone=drone, status=SampleStatus.KEPT, limit=1_000_000)
             for row in reversed(rows):  # oldest first

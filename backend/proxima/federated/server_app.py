@@ -94,11 +94,10 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
 def finish(cfg: FLConfig, recorder: RunRecorder, result: ServerResult) -> None:
     """Write the run's outcome (status, checkpoint, final accuracy) to its record."""
     status = "failed" if result.error or len(result.rounds) <= 1 else "completed"
+    acc = result.rounds[-1]["global_accuracy"] if result.rounds else None
     detail = result.error or (
         f"{len(result.rounds) - 1} rounds, global accuracy "
-        f"{result.rounds[-1]['global_accuracy']:.3f}"
-        if result.rounds
-        else "no rounds"
+        + ("n/a" if acc is None else f"{acc:.3f}")
     )
     if recorder.store is not None:
         recorder.store.update_run(

@@ -148,10 +148,13 @@ def protocols(
 
     splits = split or [*LASER_PROTOCOLS, *UAV_PROTOCOLS]
     cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads)
+    rows_so_far: list[dict] = []
     with Progress() as progress:
         task = progress.add_task("protocols", total=len(splits))
 
         def done(row: dict) -> None:
+            rows_so_far.append(row)
+            save_results(rows_so_far, json_out)  # keep finished rows if a later one fails
             progress.console.print(
                 f"{row['split']}: accuracy {row['accuracy']:.3f}, clip {row['clip_accuracy']:.3f}"
             )

@@ -52,8 +52,8 @@ class CameraView:
     framing: tuple[float, float, float] | None = None
     tolerance_m: float = 0.5
     changes: list[ViewChange] = field(default_factory=list)
-    _framed: bool | None = None
-    _lock: threading.Lock = field(default_factory=threading.Lock)
+    _framed: bool | None = field(default=None, init=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, init=False)
 
     def set_framing(self, tel: Telemetry | None = None) -> tuple[float, float, float]:
         """Frame the operator from where the drone is now (after take-off).

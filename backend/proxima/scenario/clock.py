@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from proxima.drone.events import CommandResultEvent
@@ -164,17 +164,18 @@ class FlightClock:
 def install_gate(
     engine: Any,
     clock: FlightClock,
-    frames: dict[str, int],
-    views: dict[str, Callable[[Frame], Frame]] | None = None,
+    last_t: Mapping[str, float],
+    views: Mapping[str, Callable[[Frame], Frame]] | None = None,
 ) -> None:
     """Put `clock`'s gate (and the stream's camera view, if any) in front of every
     stream of a started `proxima.engine.Engine`: each frame waits at the gate, is seen
     through the view, then goes through the stream's own pipeline unchanged.
 
-    `frames[name]` is the stream's frame count, so its last frame is known. The engine
-    has no frame hook, so each pipeline's `process` is wrapped (as the console's
-    thumbnail tap does); a stream cannot decide anything before its 60-frame window is
-    full, so frames that may pass before the wrapper is in place change nothing.
+    `last_t[name]` is the stream time of the stream's last frame, so the gate knows it.
+    The engine has no frame hook, so each pipeline's `process` is wrapped (as the
+    console's thumbnail tap does); a stream cannot decide anything before its 60-frame
+    window is full, so frames that may pass before the wrapper is in place change
+    nothing.
     """
     views = views or {}
     controller = engine.controller
@@ -184,21 +185,17 @@ def install_gate(
 
     for name, pipeline in engine.pipelines.items():
         original = pipeline.process
+        end = last_t.get(name, float("inf")) - 1e-6
         view = views.get(name)
-        total = frames.get(name)
-        count = [0]
 
         def process(
             frame: Frame,
             _name: str = name,
             _original: Callable[[Frame], Any] = original,
             _view: Callable[[Frame], Frame] | None = view,
-            _total: int | None = total,
-            _count: list[int] = count,
+            _end: float = end,
         ) -> Any:
-            _count[0] += 1
-            last = _total is not None and _count[0] >= _total
-            clock.gate(_name, frame.t, decided, last)
+            clock.gate(_name, frame.t, decided, frame.t >= _end)
             if _view is not None:
                 frame = _view(frame)
             return _original(frame)

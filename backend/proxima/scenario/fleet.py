@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import math
 import os
 import signal
 import socket
@@ -128,7 +129,8 @@ def stop_all(sims: Sequence[SimProcess], timeout: float = 5.0) -> dict[str, int]
 
 def take_off(link: DroneLink, altitude_m: float, timeout: float = 20.0) -> Telemetry:
     """Guided mode, arm, take off and wait until the vehicle hovers at `altitude_m`
-    (within 0.1 m, almost still): the pre-flight a pilot does before gesture control.
+    (within 0.1 m, almost still): the pre-flight a pilot does before handing over to
+    gesture control.
 
     Raises:
         RuntimeError: the vehicle refused a step or did not get there in time.
@@ -140,7 +142,7 @@ def take_off(link: DroneLink, altitude_m: float, timeout: float = 20.0) -> Telem
     def there(t: Telemetry) -> bool:
         if t.altitude is None or t.velocity is None or t.landed != "in_air":
             return False
-        still = sum(v * v for v in t.velocity) ** 0.5 < 0.05
+        still = math.hypot(*t.velocity) < 0.05
         return abs(t.altitude - altitude_m) < 0.1 and still
 
     tel = link.wait_for(there, timeout)

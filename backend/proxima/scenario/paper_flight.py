@@ -99,12 +99,14 @@ def run_paper_flight(
         raise ScenarioError(str(exc)) from exc
     views = (cfg.main_view, cfg.secondary_view)
     seed, streams = choose_takes(clips, PLAN, views, cfg.part, cfg.seed)
-    csv = {}
-    frames = {}
+    csv: dict[str, Path] = {}
+    frames: dict[str, int] = {}
+    last_t: dict[str, float] = {}  # the replay's time of each stream's last frame
     for name, view in zip(("main", "secondary"), views, strict=True):
         csv[name] = work / f"{name}.{view}.csv"
         streams[view].write(csv[name])
         frames[name] = len(streams[view].frames)
+        last_t[name] = float(streams[view].frames[-1] - 1) / streams[view].fps
     duration = max(s.duration_s for s in streams.values())
 
     specs = [
@@ -140,7 +142,7 @@ def run_paper_flight(
             realtime=False,
             classifier=classifier,
         )
-        rig.run_engines([engine], frames, duration, progress)
+        rig.run_engines([engine], last_t, duration, progress)
         if rig.paths is not None:
             rig.paths.stop()
         states = rig.states()
@@ -166,7 +168,11 @@ def run_paper_flight(
             for name, view in zip(("main", "secondary"), views, strict=True)
         },
     )
-    states["main"]["expected_landing_ned"] = [round(expected_end[0], 3), round(expected_end[1], 3), 0.0]
+    states["main"]["expected_landing_ned"] = [
+        round(expected_end[0], 3),
+        round(expected_end[1], 3),
+        0.0,
+    ]
     return {
         "scenario": "paper-flight",
         "description": (
@@ -206,34 +212,9 @@ def run_paper_flight(
         },
         "paths": paths,
         "simulator_exit_codes": codes,
+        "simulator_pids": {n: sim.pid for n, sim in rig.sims.items()},
         "work_dir": str(work),
     }
 
 
-def write_result(result: dict[str, Any], out: Path, title: str) -> Path:
-    """Write the JSON to `out` and the flight-path PNG beside it (`out` with .png);
-    returns the PNG's path (also recorded in the JSON as `plot`)."""
-    import json
-
-    from proxima.scenario.plot import plot_flight
-
-    png = out.with_suffix(".png")
-    homes = {n: d["home_world_enu"] for n, d in result["drones"].items()}
-    facing = {n: math.radians(d["facing_deg"]) for n, d in result["drones"].items()}
-    expected = {}
-    for name, d in result["drones"].items():
-        if "expected_landing_ned" in d:
-            expected[name] = d["expected_landing_ned"]
-        elif "expected_final_ned" in d:
-            expected[name] = d["expected_final_ned"]
-    status = "PASSED" if result["verdict"]["passed"] else "FAILED"
-    plot_flight(
-        png, f"{title} - {status}", result["paths"], homes, result["timeline"], facing, expected
-    )
-    result["plot"] = str(png)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(result, indent=1) + "\n")
-    return png
-
-
-__all__ = ["EXPECTED", "PLAN", "PaperFlightConfig", "ScenarioError", "run_paper_flight", "write_result"]
+__all__ = ["EXPECTED", "PLAN", "PaperFlightConfig", "ScenarioError", "run_paper_flight"]

@@ -42,7 +42,7 @@ def plot_flight(
     east = fig.add_subplot(grid[0, 1])
     alt = fig.add_subplot(grid[1, 1], sharex=east)
     top.plot(*operator, marker="*", markersize=16, color="black", linestyle="none")
-    top.annotate("operator", operator, textcoords="offset points", xytext=(6, 6))
+    top.annotate("operator", (operator[0], operator[1]), textcoords="offset points", xytext=(6, 6))
     for k, (name, rows) in enumerate(paths.items()):
         color = COLORS[k % len(COLORS)]
         home = homes.get(name, (0.0, 0.0, 0.0))

@@ -110,9 +110,21 @@ class TimelineRecorder:
                 "reason": e.reason,
             }
         if isinstance(e, ArmingEvent):
-            return {"t": t, "kind": "arming", "stream": e.stream, "armed": e.armed, "reason": e.reason}
+            return {
+                "t": t,
+                "kind": "arming",
+                "stream": e.stream,
+                "armed": e.armed,
+                "reason": e.reason,
+            }
         if isinstance(e, CommandEvent):
-            return {"t": t, "kind": "command", "stream": e.stream, "command": e.command, "drone": e.drone}
+            return {
+                "t": t,
+                "kind": "command",
+                "stream": e.stream,
+                "command": e.command,
+                "drone": e.drone,
+            }
         if isinstance(e, CommandResultEvent):
             now = _r(self.now())
             common = {
@@ -123,13 +135,13 @@ class TimelineRecorder:
                 "command": e.command,
                 "action": e.action,
             }
-            key = (scope, e.drone, e.log_id, e.command)
+            tracked = (scope, e.drone, e.log_id, e.command)
             with self._lock:
-                if e.status == "done" and key in self._tracked:
-                    self._tracked.discard(key)
+                if e.status == "done" and tracked in self._tracked:
+                    self._tracked.discard(tracked)
                     return {**common, "kind": "outcome", "outcome": e.outcome}
                 if e.status == "sent" and not e.outcome:
-                    self._tracked.add(key)
+                    self._tracked.add(tracked)
             return {
                 **common,
                 "kind": "ack",
@@ -148,14 +160,20 @@ class TimelineRecorder:
                 "message": e.message,
             }
         if isinstance(e, StreamEvent):
-            return {"t": t, "kind": "stream", "stream": e.stream, "state": e.state, "detail": e.detail}
+            return {
+                "t": t,
+                "kind": "stream",
+                "stream": e.stream,
+                "state": e.state,
+                "detail": e.detail,
+            }
         return None
 
     def timeline(self) -> list[dict[str, Any]]:
         """Every entry, in scenario time (stable for equal times)."""
         with self._lock:
             entries = [dict(e) for e in self.entries]
-        return sorted(entries, key=lambda e: (e["t"] if e["t"] is not None else -1e9))
+        return sorted(entries, key=lambda e: e["t"] if e["t"] is not None else -1e9)
 
 
 @dataclass
@@ -178,8 +196,8 @@ class PathRecorder:
     now: Callable[[], float | None]
     period_s: float = 0.05
     samples: dict[str, list[PathSample]] = field(default_factory=dict)
-    _stop: threading.Event = field(default_factory=threading.Event)
-    _thread: threading.Thread | None = None
+    _stop: threading.Event = field(default_factory=threading.Event, init=False)
+    _thread: threading.Thread | None = field(default=None, init=False)
 
     def start(self) -> PathRecorder:
         self.samples = {name: [] for name in self.links}

@@ -39,8 +39,9 @@ class ScenarioError(RuntimeError):
 @dataclass(frozen=True)
 class DroneSpec:
     """One vehicle of a scenario: its name, where its local origin is in the world frame
-    (metres, x east, y north, z up; the operator stands at the origin), the heading its
-    camera faces (radians, 0 = north, declared for the plot), and its hover altitude."""
+    (metres, x east, y north, z up; the operator stands at the origin), the direction its
+    camera looks (radians, 0 = north; a gimbal pointed at the operator: the vehicles
+    themselves keep the heading north they start with), and its hover altitude."""
 
     name: str
     home: tuple[float, float, float]
@@ -52,8 +53,20 @@ class DroneSpec:
 def fully_visible(xyz: np.ndarray, visibility: np.ndarray) -> np.ndarray:
     """Per frame, whether `proxima.pose.operator_visible` holds (the FULL sight)."""
     return np.array(
-        [operator_visible(Pose(t=0.0, xyz=x, visibility=v)) for x, v in zip(xyz, visibility, strict=True)]
+        [
+            operator_visible(Pose(t=0.0, xyz=x, visibility=v))
+            for x, v in zip(xyz, visibility, strict=True)
+        ]
     )
+
+
+def longest_blink(full: np.ndarray) -> int:
+    """The longest run of frames in which the operator is not FULL."""
+    best = run = 0
+    for f in full:
+        run = 0 if f else run + 1
+        best = max(best, run)
+    return best
 
 
 def choose_takes(
@@ -63,24 +76,36 @@ def choose_takes(
     part: str,
     seed: int | None,
     tries: int = 40,
+    require_full: bool = True,
+    full_views: Sequence[str] | None = None,
+    max_blink: int = 0,
 ) -> tuple[int, dict[str, Any]]:
-    """Stitch `plan` for `views`; with `seed` None, the first seed whose every stream
-    sees the whole operator (FULL) on every frame, so only the scenario's own camera
-    model takes the feet away. Returns (seed, streams).
+    """Stitch `plan` for `views`; with `seed` None, the first seed whose streams of
+    `full_views` (default: all) see the whole operator (FULL) on every frame but blinks
+    of at most `max_blink` frames (if `require_full`), so that only the scenario's own
+    camera model takes the feet away. Returns (seed, streams).
 
     Raises:
-        ScenarioError: no such seed (or the given seed's streams are not FULL).
+        ScenarioError: the plan cannot be stitched, or no seed (or not the given seed)
+            meets the condition.
     """
-    from proxima.engine.stitch import stitch_views
+    from proxima.engine.stitch import StitchError, stitch_views
 
-    seeds = [seed] if seed is not None else list(range(tries))
+    checked = list(full_views) if full_views is not None else list(views)
+    seeds = [seed] if seed is not None else list(range(tries if require_full else 1))
     for s in seeds:
-        streams = stitch_views(clips, plan, views=views, part=part, seed=s)
-        if all(fully_visible(st.xyz, st.visibility).all() for st in streams.values()):
+        try:
+            streams = stitch_views(clips, plan, views=views, part=part, seed=s)
+        except StitchError as exc:
+            raise ScenarioError(f"cannot stitch the scenario's streams: {exc}") from exc
+        if not require_full or all(
+            longest_blink(fully_visible(streams[v].xyz, streams[v].visibility)) <= max_blink
+            for v in checked
+        ):
             return s, streams
     which = f"seed {seed}" if seed is not None else f"any of seeds 0..{tries - 1}"
     raise ScenarioError(
-        f"with {which}, the stitched {'/'.join(views)} streams do not see the whole "
+        f"with {which}, the stitched {'/'.join(checked)} streams do not see the whole "
         "operator on every frame (LASER clips lose the feet in places); try another --seed"
     )
 
@@ -163,7 +188,9 @@ class Rig:
                     "kind": "preflight",
                     "drone": name,
                     "detail": f"took off to {self.specs[name].altitude_m} m",
-                    "position_ned": [round(v, 3) for v in tel.position] if tel and tel.position else None,
+                    "position_ned": [round(v, 3) for v in tel.position]
+                    if tel and tel.position
+                    else None,
                 }
             )
 
@@ -172,9 +199,7 @@ class Rig:
         clock, its command log in the work folder."""
         log = CommandLog(self.work_dir / f"commands-{'-'.join(names)}.db")
         safety = SafetyGate(SafetyConfig(), clock=self.clock.now)
-        ctl = DroneController(
-            {n: self.links[n] for n in names}, safety=safety, log=log, bus=bus
-        )
+        ctl = DroneController({n: self.links[n] for n in names}, safety=safety, log=log, bus=bus)
         ctl.attach(bus)
         self.controllers.append(ctl)
         return ctl
@@ -190,7 +215,7 @@ class Rig:
     def run_engines(
         self,
         engines: Sequence[Any],
-        frames: dict[str, int],
+        last_t: dict[str, float],
         duration_s: float,
         progress: Progress | None = None,
     ) -> None:
@@ -202,7 +227,7 @@ class Rig:
             self.engines.append(engine)
             engine.start()
             views = {s: v.apply for s, v in self.views.items() if s in engine.pipelines}
-            install_gate(engine, self.clock, frames, views)
+            install_gate(engine, self.clock, last_t, views)
         while not all(e.wait(0.2) for e in engines):
             if progress:
                 progress("flight", self.clock.now(), duration_s)

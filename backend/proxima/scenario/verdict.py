@@ -5,8 +5,8 @@ Terms used in the reasons:
 - a *gesture command* is a `command` entry from a stream (the operator's gesture); the
   engine's own safety hover when every stream lost the operator has stream "";
 - a *handover* is a change of the driving stream between two streams; the first
-  acquisition of the operator ("" -> main) and the end of the replays (-> "") are
-  listed in the timeline but are not handovers between drones;
+  acquisition of the operator ("" -> main) and the end of the replays (reason
+  `stream_ended`) are listed in the timeline but are not handovers between drones;
 - *armed* follows the engine's `arming` entries.
 """
 
@@ -73,8 +73,13 @@ def gesture_commands(timeline: Sequence[dict[str, Any]]) -> list[dict[str, Any]]
 
 
 def drone_handovers(timeline: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Changes of the driving stream from one stream to another."""
-    return [h for h in entries(timeline, "handover") if h["from_stream"] and h["to_stream"]]
+    """Changes of the driving stream from one stream to another while the replays run
+    (not the hand-downs when a replay ends)."""
+    return [
+        h
+        for h in entries(timeline, "handover")
+        if h["from_stream"] and h["to_stream"] and h["reason"] != "stream_ended"
+    ]
 
 
 def commands_before_arming(timeline: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -97,7 +102,9 @@ def commands_before_arming(timeline: Sequence[dict[str, Any]]) -> list[dict[str,
 ARMING = "have_command"
 
 
-def collapse_rearms(commands: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+def collapse_rearms(
+    commands: Sequence[dict[str, Any]],
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Split gesture commands into the sequence and the repeats of `have_command` that
     follow a `have_command` from the same stream (the operator still performing it after
     the debounce's release time: arming again sends nothing to a vehicle)."""
@@ -156,7 +163,9 @@ def check_sequence(
         wrong = []
         for c in commands:
             segments = truth.get(c["stream"])
-            if segments is not None and c["command"] not in performed_at(segments, c["t"], latency_s):
+            if segments is not None and c["command"] not in performed_at(
+                segments, c["t"], latency_s
+            ):
                 wrong.append(f"{c['command']}@{c['stream']} t={c['t']}")
         verdict.check(
             not wrong,
@@ -254,7 +263,9 @@ def judge_paper_flight(
     v = Verdict()
     check_landed_at(v, main, main_state, expected_ne, tolerance_m)
     hands = drone_handovers(timeline)
-    shown = ", ".join(f"{h['from_stream']}->{h['to_stream']} ({h['reason']}) t={h['t']}" for h in hands)
+    shown = ", ".join(
+        f"{h['from_stream']}->{h['to_stream']} ({h['reason']}) t={h['t']}" for h in hands
+    )
     v.check(
         len(hands) == 1 and hands[0]["from_stream"] == main and hands[0]["to_stream"] == secondary,
         f"exactly one handover: {shown}",
