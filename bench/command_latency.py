@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from proxima.control import (
     CommandController,
     ControlSettings,
@@ -355,6 +356,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             "selected": best,
             "top": rows[:15],
             "configs": len(rows),
+            "fewest_wrong": min(
+                rows, key=lambda r: (r["wrong_or_spurious_per_hour"], -r["utility"])
+            ),
+            "all": rows,
         }
         log(f"selected {best}")
         settings = settings.model_copy(update={"stride": best["stride"]})

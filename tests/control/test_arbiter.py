@@ -1,6 +1,7 @@
 """The priority arbiter on explicit sequences of how each stream sees the operator."""
 
 import pytest
+
 from proxima.control import PriorityArbiter, Sight
 
 FULL, PARTIAL, NONE = Sight.FULL, Sight.PARTIAL, Sight.NONE

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from proxima.control import MovingAverageFilter
 from proxima.types import GESTURES
 

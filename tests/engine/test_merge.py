@@ -8,7 +8,7 @@ import time
 from proxima.control import CommandController, ControlSettings, Sight, StreamUpdate
 from proxima.engine import TimeOrderedMerge
 
-SETTINGS = ControlSettings(debounce_s=1.0, hold_s=0.5, regain_s=0.3)
+SETTINGS = ControlSettings(debounce_s=1.0, confirm=1, hold_s=0.5, regain_s=0.3)
 
 
 def script() -> dict[str, list[StreamUpdate]]:

@@ -1,6 +1,5 @@
-"""Shared pieces of the federated tests: a coarse, fast run config (few, widely spaced
-windows; one local epoch), and a real console sample store with a good and a corrupt
-sample for the front drone."""
+"""Fixtures of the federated tests: a real console sample store with a good and a corrupt
+sample for the front drone (the fast run config is in fl_helpers.py)."""
 
 from __future__ import annotations
 
@@ -9,24 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from proxima.federated.config import FLConfig
-
-
-def fast_config(**overrides: object) -> FLConfig:
-    """Two rounds, coarse windows, one local epoch: seconds per round on this machine."""
-    values: dict = {
-        "rounds": 2,
-        "local_epochs": 1,
-        "stride": 12,
-        "test_stride": 12,
-        "min_clients": 3,
-        "include_samples": False,
-        "wait_timeout_s": 120.0,
-        "round_timeout_s": 120.0,
-    }
-    values.update(overrides)
-    return FLConfig(**values)  # type: ignore[arg-type]
 
 
 @pytest.fixture(scope="session")

@@ -6,7 +6,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from conftest import fast_config
+from fl_helpers import fast_config
 from flwr.app import Array, ArrayRecord, MetricRecord, RecordDict
 
 from proxima.federated.config import APP_DIR, ConfigError, FLConfig

@@ -9,7 +9,7 @@ import threading
 from pathlib import Path
 
 import pytest
-from conftest import fast_config
+from fl_helpers import fast_config
 
 from proxima.events import EventBus
 from proxima.federated.deploy import LocalFederation, default_drones

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from conftest import fast_config
+from fl_helpers import fast_config
 from typer.testing import CliRunner
 
 from proxima.cli import app

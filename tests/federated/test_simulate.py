@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import fast_config
+from fl_helpers import fast_config
 from typer.testing import CliRunner
 
 from proxima.cli import app

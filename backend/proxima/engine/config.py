@@ -29,7 +29,9 @@ class EngineSettings(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
-    stride: int = Field(5, ge=1, description="classify the window every `stride` frames")
+    stride: int = Field(
+        3, ge=1, description="classify the window every `stride` frames (tuned at 30 fps)"
+    )
     max_gap_s: float = Field(
         0.25,
         gt=0.0,

@@ -146,7 +146,7 @@ def _summary(out: dict[str, Any], json_out: Path | None, png: Path | None) -> No
         + (f", model {out['checkpoint']}" if out.get("checkpoint") else "")
         + (f" -> {json_out}" if json_out else "")
         + (f", {png}" if png else "")
-        + (f" ({out['detail']})" if out.get("detail") else "")
+        + (f" ({out['detail']})" if out.get("detail") and out["status"] != "completed" else "")
     )
 
 
