@@ -35,6 +35,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from rich.progress import Progress
+
 from proxima.drone.controller import DroneController
 from proxima.drone.link import Telemetry
 from proxima.drone.mavlink_link import MavlinkLink, mav
@@ -42,7 +44,6 @@ from proxima.drone.safety import SafetyConfig
 from proxima.events import CommandEvent
 from proxima.store.command_log import CommandLog
 from proxima.types import LinkState
-from rich.progress import Progress
 
 RESULTS = Path(__file__).parent / "results"
 PROXIMA = str(Path(sys.executable).with_name("proxima"))

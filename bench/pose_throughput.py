@@ -160,9 +160,10 @@ def main() -> None:
     args = parser.parse_args()
 
     import mediapipe
-    from proxima.pose import resolve_pose_model
     from rich.console import Console
     from rich.progress import Progress
+
+    from proxima.pose import resolve_pose_model
 
     console = Console()
     load_before = os.getloadavg()

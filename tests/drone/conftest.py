@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+
 from proxima.drone.mavlink_link import LinkConfig, MavlinkLink
 from proxima.events import EventBus
 

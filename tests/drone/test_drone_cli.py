@@ -10,8 +10,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import typer
-from proxima.drone.commands import register
 from typer.testing import CliRunner
+
+from proxima.drone.commands import register
 
 if TYPE_CHECKING:
     from conftest import StartSim

@@ -8,6 +8,7 @@ import re
 from pathlib import Path
 
 import pytest
+
 from proxima.drone.mapping import DEFAULT_MAPPING, MappingError, load_mapping
 from proxima.drone.safety import EmergencyStopError, SafetyConfig, SafetyGate
 from proxima.store.command_log import CommandLog

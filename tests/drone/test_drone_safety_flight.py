@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
+
 from proxima.drone.controller import DroneController, EmergencyStopService
 from proxima.drone.events import DroneAlarmEvent
 from proxima.drone.mapping import DEFAULT_MAPPING, load_mapping

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from proxima.ingest import (
     FrameSource,
     InvalidTransition,

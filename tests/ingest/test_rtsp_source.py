@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from proxima.ingest import SourceError, StateChange, open_source
 from proxima.ingest.live import ReconnectPolicy
 from proxima.types import StreamState

@@ -9,6 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+
 from proxima.ingest import SourceError, StateChange, open_source
 from proxima.types import StreamState
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+
 from proxima.ingest import open_source
 from proxima.pose import OperatorPoser, operator_visible
 

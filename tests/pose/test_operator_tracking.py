@@ -9,6 +9,7 @@ import cv2
 import matplotlib
 import numpy as np
 import pytest
+
 from proxima.ingest import read_landmark_csv
 from proxima.pose import (
     OneEuroFilter,

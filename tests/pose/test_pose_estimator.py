@@ -14,6 +14,7 @@ import cv2
 import matplotlib
 import numpy as np
 import pytest
+
 from proxima.pose import PoseEstimator, PoseModelError, operator_visible, resolve_pose_model
 from proxima.pose.model import MODEL_FILENAME, download_model, sha256_of
 from proxima.types import Pose

@@ -7,21 +7,28 @@ Public API: `Engine`, `StreamSpec`, `EngineSettings`, `StreamPipeline`,
 `TimeOrderedMerge`, `JsonlWriter`, `PoseWindow`.
 """
 
-from proxima.engine.config import EngineSettings, StreamSpec
-from proxima.engine.jsonl import JsonlWriter
-from proxima.engine.merge import TimeOrderedMerge
-from proxima.engine.runner import Engine, StreamStats, load_classifier
-from proxima.engine.stream import StreamPipeline
-from proxima.engine.window import PoseWindow
+from __future__ import annotations
 
-__all__ = [
-    "Engine",
-    "EngineSettings",
-    "JsonlWriter",
-    "PoseWindow",
-    "StreamPipeline",
-    "StreamSpec",
-    "StreamStats",
-    "TimeOrderedMerge",
-    "load_classifier",
-]
+from importlib import import_module
+from typing import Any
+
+# Lazy exports, so that registering `proxima recognize` does not import pydantic, torch
+# and the rest for every other subcommand.
+_EXPORTS = {
+    "Engine": "runner",
+    "EngineSettings": "config",
+    "JsonlWriter": "jsonl",
+    "PoseWindow": "window",
+    "StreamPipeline": "stream",
+    "StreamSpec": "config",
+    "StreamStats": "runner",
+    "TimeOrderedMerge": "merge",
+    "load_classifier": "runner",
+}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        return getattr(import_module(f"proxima.engine.{_EXPORTS[name]}"), name)
+    raise AttributeError(name)
