@@ -388,9 +388,28 @@ def main(argv: Sequence[str] | None = None) -> int:
                 log(f"  engine {n}/{len(streams)}: {_brief(total.summary())}")
     # The paper's decision settings on the same evaluation streams (offline replay).
     paper = ControlSettings(filter_size=3, threshold=0.0, confirm=1, debounce_s=10.0)
-    cache = [cached_probs(clf, s, [settings.stride], settings.max_gap_s) for s in streams]
+    cautious = result.get("tuning", {}).get("fewest_wrong")
+    strides = sorted({settings.stride, *([cautious["stride"]] if cautious else [])})
+    cache = [cached_probs(clf, s, strides, settings.max_gap_s) for s in streams]
     paper_summary = evaluate_config(streams, cache, settings.stride, paper, clf.labels)
     ours_offline = evaluate_config(streams, cache, settings.stride, control, clf.labels)
+    if cautious:
+        # The tuning grid's setting with the fewest wrong commands, on the evaluation
+        # streams: what avoiding wrong commands costs in latency.
+        params = {
+            k: cautious[k]
+            for k in ("threshold", "confirm", "debounce_s", "release_s")
+            if k in cautious
+        }
+        cautious_control = control.model_copy(update=params)
+        result["cautious_profile"] = {
+            "stride": cautious["stride"],
+            "control": cautious_control.model_dump(),
+            **_brief(
+                evaluate_config(streams, cache, cautious["stride"], cautious_control, clf.labels)
+            ),
+            "note": "the tuning grid's setting with the fewest wrong commands (offline replay)",
+        }
     summary = total.summary()
     result.update(
         streams={

@@ -14,7 +14,7 @@ class ControlSettings(BaseModel):
 
     The paper averages three recognitions and waits 10 s between commands (10.4 s
     response); the defaults keep its three-recognition filter and were chosen by the
-    latency benchmark on held-out data (median onset -> command 1.7 s; see
+    latency benchmark on held-out data (median onset -> command 1.6 s; see
     docs/recognition.md for the figures and what they miss).
     """
 
@@ -22,10 +22,10 @@ class ControlSettings(BaseModel):
 
     filter_size: int = Field(3, ge=1, description="recognitions in the moving average")
     threshold: float = Field(
-        0.75, ge=0.0, le=1.0, description="averaged probability an action needs"
+        0.8, ge=0.0, le=1.0, description="averaged probability an action needs"
     )
     confirm: int = Field(
-        3, ge=1, description="consecutive filtered decisions that must agree before a command"
+        1, ge=1, description="consecutive filtered decisions that must agree before a command"
     )
     debounce_s: float = Field(3.0, ge=0.0, description="least time between two commands")
     release_s: float = Field(

@@ -18,7 +18,7 @@ import logging
 import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from proxima.control import CommandController, ControlSettings, Sight, StreamUpdate
@@ -42,7 +42,6 @@ class StreamStats:
     error: str | None = None
     total_frames: int | None = None  # known for replays, for progress bars
     done: bool = False
-    extra: dict = field(default_factory=dict)
 
 
 def load_classifier(path: str | Path | None) -> Classifier:
