@@ -3,6 +3,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 import torch
 from typer.testing import CliRunner
 
@@ -60,3 +61,15 @@ def test_paper_lstm_learns_with_clipping(laser_clips) -> None:
     history = fit(model, pipe, w, None, cfg)
     assert history[-1].train_loss < history[0].train_loss
     assert history[-1].train_loss < np.log(13) - 0.3  # no collapse to a constant
+
+
+def test_a_checkpoint_from_another_pipeline_version_is_refused(small_checkpoint, tmp_path) -> None:
+    blob = torch.load(small_checkpoint, weights_only=True)
+    blob["config"]["num_features"] = 68  # as the body pipeline was before hand features
+    old = tmp_path / "old.pt"
+    torch.save(blob, old)
+    with pytest.raises(ValueError, match=r"made for 68 features a frame.*retrain"):
+        GestureClassifier.load(old)
+    with pytest.raises(ValueError, match="not a Proxima gesture checkpoint"):
+        torch.save({"weights": 1}, tmp_path / "other.pt")
+        GestureClassifier.load(tmp_path / "other.pt")

@@ -89,9 +89,16 @@ class GestureClassifier:
         if not isinstance(blob, dict) or blob.get("format") != FORMAT:
             raise ValueError(f"{path}: not a Proxima gesture checkpoint (format {FORMAT})")
         model = build_model(blob["model"], **blob["config"])
-        model.load_state_dict({k: v.float() if v.is_floating_point() else v
-                               for k, v in blob["state_dict"].items()})  # fmt: skip
         pipeline = make_pipeline(blob["pipeline"]["name"], blob["pipeline"]["state"])
+        expected = blob["config"].get("num_features")
+        if expected != pipeline.num_features:  # made before the pipeline changed
+            raise ValueError(
+                f"{path}: made for {expected} features a frame, but the {pipeline.name!r} "
+                f"pipeline now gives {pipeline.num_features}; retrain it"
+            )
+        sd = blob["state_dict"]
+        state = {k: v.float() if v.is_floating_point() else v for k, v in sd.items()}
+        model.load_state_dict(state)
         return cls(model, blob["model"], pipeline, int(blob["window"]), tuple(blob["labels"]),
                    blob.get("metadata", {}))  # fmt: skip
 
