@@ -287,6 +287,23 @@ class Rig:
             return {}
         return self.paths.as_time_series(self.stream_start_wall or time.monotonic())
 
+    def run_record(
+        self, duration_s: float, t0: float, paths: dict[str, Any], codes: dict[str, int]
+    ) -> dict[str, Any]:
+        """The timing, flight paths and simulator outcome every scenario result carries."""
+        return {
+            "timing": {
+                "stream_s": round(duration_s, 3),
+                "realtime_stream_s": round(self.clock.realtime_s, 3),
+                "wall_s": round(time.monotonic() - t0, 3),
+                "coordination": "lock-step replay, real time only while a drone moves",
+            },
+            "paths": paths,
+            "simulator_exit_codes": codes,
+            "simulator_pids": {n: sim.pid for n, sim in self.sims.items()},
+            "work_dir": str(self.work_dir),
+        }
+
     def close(self) -> dict[str, int]:
         """Stop engines, controllers, links and simulators (by PID); the exit codes."""
         for engine in self.engines:

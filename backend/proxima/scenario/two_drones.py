@@ -206,14 +206,5 @@ def run_two_drones(
             "altitude_m": cfg.altitude_m,
             "layout_world_enu": {s.name: list(s.home) for s in specs},
         },
-        "timing": {
-            "stream_s": round(duration, 3),
-            "realtime_stream_s": round(rig.clock.realtime_s, 3),
-            "wall_s": round(time.monotonic() - t0, 3),
-            "coordination": "lock-step replay, real time only while a drone moves",
-        },
-        "paths": paths,
-        "simulator_exit_codes": codes,
-        "simulator_pids": {n: sim.pid for n, sim in rig.sims.items()},
-        "work_dir": str(work),
+        **rig.run_record(duration, t0, paths, codes),
     }
