@@ -15,7 +15,7 @@ from proxima.gesture.evaluate import metrics
 from proxima.gesture.features import make_pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
-from proxima.gesture.train import EpochLog, TrainConfig, fit, predict_proba
+from proxima.gesture.train import EpochLog, TrainConfig, features, fit, predict_proba
 from proxima.gesture.windows import WINDOW, Windows, make_windows, split_clips, validation_parts
 
 
@@ -92,8 +92,7 @@ def evaluate_checkpoint(
     parts = split_clips(data.clips, split, clf.window, data.uav_dir)
     test = parts.test if parts.test else parts.train  # `all`: the training data itself
     w = make_windows(test, clf.window, stride, max_gap)
-    x = clf.pipeline.transform(to_metric(w.xyz, w.aspect), w.has_z)
-    result = metrics(w.labels, predict_proba(clf.model, x), w.clip)
+    result = metrics(w.labels, predict_proba(clf.model, features(clf.pipeline, w)), w.clip)
     result.update(split=split, checkpoint=str(checkpoint), skipped_windows=w.skipped,
                   model=clf.model_name)  # fmt: skip
     return result
