@@ -22,7 +22,7 @@ class PoseEvent(Event):
 
     xyz: list[list[float]]
     visibility: list[float]
-    visible: bool  # the "operator visible" test, feet included
+    sight: str  # `Sight` name in lower case: "full" (feet included), "partial", "none"
     type: str = field(default="pose", init=False)
 
 

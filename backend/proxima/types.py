@@ -7,7 +7,7 @@ pymavlink, torch) are converted where they enter and never leave their module.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import StrEnum
+from enum import IntEnum, StrEnum
 
 import numpy as np
 
@@ -69,6 +69,18 @@ class StreamState(StrEnum):
     STALLED = "stalled"
     RECONNECTING = "reconnecting"
     ENDED = "ended"
+
+
+class Sight(IntEnum):
+    """How well one stream sees the operator in one frame (`proxima.pose.operator_sight`).
+
+    One rule for everything that asks "is the operator there?": the arbiter lets a stream
+    drive at PARTIAL or better and prefers FULL; the drone watchdog hovers when no stream
+    has had PARTIAL or better for a while."""
+
+    NONE = 0  # nobody, not the operator, or too few landmarks to read a gesture
+    PARTIAL = 1  # enough landmarks to read gestures, but the feet are out of view
+    FULL = 2  # `operator_visible`: enough landmarks, feet included
 
 
 class LinkState(StrEnum):

@@ -75,7 +75,7 @@ on("pose", (msg) => {
   const s = ensureStream(msg.stream);
   s.pose = msg;
   s.poseCount += 1;
-  s.live.visible = msg.visible;
+  s.live.sight = msg.sight;
   s.dirty = true;
 });
 

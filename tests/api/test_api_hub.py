@@ -50,7 +50,7 @@ def _poses(clip: str, stream: str) -> list[PoseEvent]:
             stream=stream,
             xyz=xyz.tolist(),
             visibility=vis.tolist(),
-            visible=True,
+            sight="full",
         )
         for f, xyz, vis in zip(track.frames, track.xyz, track.visibility, strict=True)
     ]
@@ -141,7 +141,7 @@ def test_slow_browser_gets_newest_per_key_and_never_stalls_the_bus(live: Live) -
 
 
 def test_coalescing_keys() -> None:
-    assert coalesce_key(PoseEvent(t=0, stream="a", xyz=[], visibility=[], visible=True)) == (
+    assert coalesce_key(PoseEvent(t=0, stream="a", xyz=[], visibility=[], sight="full")) == (
         "pose",
         "a",
     )

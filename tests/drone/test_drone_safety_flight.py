@@ -21,9 +21,9 @@ if TYPE_CHECKING:
     from conftest import Connect, StartSim
 
 
-def pose(t: float, visible: bool) -> PoseEvent:
+def pose(t: float, sight: str) -> PoseEvent:
     return PoseEvent(
-        t=t, stream="front", xyz=[[0.5, 0.5, 0.0]] * 33, visibility=[1.0] * 33, visible=visible
+        t=t, stream="front", xyz=[[0.5, 0.5, 0.0]] * 33, visibility=[1.0] * 33, sight=sight
     )
 
 
@@ -50,11 +50,15 @@ def test_operator_lost_hovers_and_emergency_stop_needs_confirmation(
         {"alpha": link}, mapping=mapping, log=log, bus=bus, safety=SafetyConfig(operator_lost_s=0.6)
     )
     try:
-        ctl.on_event(pose(0.0, True))
+        ctl.on_event(pose(0.0, "full"))
         ctl.handle(CommandEvent(t=0.1, stream="front", command="have_command", drone="alpha"))
         out = ctl.handle(CommandEvent(t=0.2, stream="front", command="move_ahead", drone="alpha"))
         assert out.status == "sent" and abs(out.target[0] - 3.0) < 0.05
-        ctl.on_event(pose(0.3, False))  # the operator leaves every stream's view
+        # The feet leave the image: the arbiter still lets this stream drive, so no hover.
+        ctl.on_event(pose(0.25, "partial"))
+        time.sleep(0.4)
+        assert not ctl.safety.operator_lost()
+        ctl.on_event(pose(0.3, "none"))  # the operator leaves every stream's view
 
         # After operator_lost_s the watchdog sends hold: the drone stops short of 3 m.
         time.sleep(0.7)

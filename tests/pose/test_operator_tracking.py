@@ -16,10 +16,11 @@ from proxima.pose import (
     OperatorTracker,
     PoseEstimator,
     body_centre,
+    operator_sight,
     operator_visible,
     selection_score,
 )
-from proxima.types import Pose
+from proxima.types import Pose, Sight
 
 skimage_data = pytest.importorskip("skimage.data")
 
@@ -62,6 +63,17 @@ def test_visibility_test_requires_feet() -> None:
     v_feet_only[27:33] = 0.9
     assert not operator_visible(Pose(0.0, x, v_feet_only))
     assert not operator_visible(None)
+    # The levels the arbiter and the drone watchdog share: the body without its feet is
+    # still enough to read gestures (PARTIAL); feet alone or nothing are not (NONE).
+    assert operator_sight(Pose(0.0, x, v)) == Sight.FULL
+    assert operator_sight(Pose(0.0, x, v_no_feet)) == Sight.PARTIAL
+    assert operator_sight(Pose(0.0, x, v_feet_only)) == Sight.NONE
+    assert operator_sight(None) == Sight.NONE
+    frames = zip(slow.xyz, slow.visibility, strict=True)
+    sights = [operator_sight(Pose(0.0, x, v)) for x, v in frames]
+    assert [s == Sight.FULL for s in sights] == results.tolist()
+    # slow_down's feet leave the image, the body nearly never does.
+    assert sights.count(Sight.NONE) < 0.02 * len(sights)
 
 
 def test_one_euro_filter_smooths_jitter_and_follows_motion() -> None:

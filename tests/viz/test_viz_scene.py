@@ -70,7 +70,7 @@ def test_scene_model_tracks_drones_driving_and_operator(laser_dir) -> None:  # t
             stream="side",
             xyz=track.xyz[0].tolist(),
             visibility=track.visibility[0].tolist(),
-            visible=True,
+            sight="full",
         )
     )
     op = model.snapshot()["operator"]
@@ -85,7 +85,7 @@ def test_scene_model_tracks_drones_driving_and_operator(laser_dir) -> None:  # t
             stream="front",
             xyz=track.xyz[1].tolist(),
             visibility=track.visibility[1].tolist(),
-            visible=True,
+            sight="full",
         )
     )
     assert model.version == before

@@ -11,7 +11,7 @@ import threading
 
 from proxima.events import EventBus, PoseEvent
 from proxima.ingest import open_source
-from proxima.pose import operator_visible
+from proxima.pose import operator_sight
 
 
 class ReplayPoseFeed:
@@ -46,7 +46,7 @@ class ReplayPoseFeed:
                                 stream=name,
                                 xyz=pose.xyz.round(4).tolist(),
                                 visibility=pose.visibility.round(3).tolist(),
-                                visible=bool(operator_visible(pose)),
+                                sight=operator_sight(pose).name.lower(),
                             )
                         )
                         self.published[name] += 1

@@ -80,7 +80,7 @@ def encode_event(event: Event, published: float) -> str:
             "stream": event.stream,
             "xyz": np.round(xyz, 4).tolist(),
             "visibility": np.round(vis, 3).tolist(),
-            "visible": bool(getattr(event, "visible", False)),
+            "sight": str(getattr(event, "sight", "none")),
         }
     else:
         msg = event.to_dict()

@@ -46,7 +46,7 @@ class LiveState:
             if kind == "pose":
                 s = self._stream(event.stream)
                 s["pose_t"] = event.t
-                s["visible"] = bool(getattr(event, "visible", False))
+                s["sight"] = str(getattr(event, "sight", "none"))
                 s["pose_wall"] = now
             elif kind == "gesture":
                 s = self._stream(event.stream)

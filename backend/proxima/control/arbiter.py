@@ -1,9 +1,9 @@
 """The priority arbiter: which stream's recognition drives the controlled drone.
 
-Each stream reports how well it sees the operator (`Sight`): FULL (the pose package's
-`operator_visible`, feet included), PARTIAL (the operator is detected but, e.g., the feet
-left the image) or NONE. Streams are ranked (main first). The rule, applied at every
-update:
+Each stream reports how well it sees the operator (`Sight`, from
+`proxima.pose.operator_sight`): FULL (`operator_visible`, feet included), PARTIAL (enough
+landmarks to read gestures, but the feet left the image) or NONE. Streams are ranked
+(main first). The rule, applied at every update:
 
 - the highest-ranked stream that sees the operator FULL drives; if none does, the
   highest-ranked one that sees them at least PARTIAL drives; if none, nobody drives ("")
@@ -15,22 +15,16 @@ update:
 So, as in the paper, when the main drone's camera loses the operator's feet the secondary
 drone (which sees the whole operator) takes over, and the main one takes control back
 once it sees the whole operator again; a single camera whose view cuts the feet keeps
-driving, because nothing better sees the operator.
+driving, because nothing better sees the operator. The drone watchdog uses the same
+levels: it hovers only when no stream has seen the operator at PARTIAL or better.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from enum import IntEnum
 
-
-class Sight(IntEnum):
-    """How well one stream sees the operator in one frame."""
-
-    NONE = 0  # nobody (or not the operator) in view
-    PARTIAL = 1  # operator detected, but not `operator_visible` (e.g. feet cut off)
-    FULL = 2  # `operator_visible`: enough landmarks, feet included
+from proxima.types import Sight
 
 
 @dataclass(frozen=True)

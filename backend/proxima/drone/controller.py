@@ -146,8 +146,11 @@ class DroneController:
     def on_event(self, event: Event) -> None:
         """Feed one engine event (what `attach` does for every event on the bus)."""
         if isinstance(event, PoseEvent):
-            self.safety.note_operator(event.stream, event.visible)
-            if event.visible:
+            # The arbiter's rule: a stream that sees the operator, feet or not, keeps
+            # them present; only NONE everywhere for operator_lost_s means hover.
+            seen = event.sight != "none"
+            self.safety.note_operator(event.stream, seen)
+            if seen:
                 self._operator_lost_handled = False
         elif isinstance(event, ActionEvent):
             if event.action:

@@ -19,7 +19,7 @@ from proxima.control import ControlSettings, MovingAverageFilter, Sight, StreamU
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.window import PoseWindow
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
-from proxima.pose import operator_visible
+from proxima.pose import operator_sight
 from proxima.types import Event, Frame, Pose
 
 DATASET_ASPECT = 16 / 9  # the LASER videos; replayed poses carry no image size
@@ -123,7 +123,7 @@ class StreamPipeline:
         pose = self._operator_pose(frame)
         if pose is None:
             return StreamUpdate(self.name, t, Sight.NONE)
-        sight = Sight.FULL if operator_visible(pose) else Sight.PARTIAL
+        sight = operator_sight(pose)
         if (self.frames - 1) % self.settings.pose_every == 0:
             self.publish(
                 PoseEvent(
@@ -131,7 +131,7 @@ class StreamPipeline:
                     stream=self.name,
                     xyz=pose.xyz.round(4).tolist(),
                     visibility=pose.visibility.round(3).tolist(),
-                    visible=sight == Sight.FULL,
+                    sight=sight.name.lower(),
                 )
             )
         if self.window.push(pose):

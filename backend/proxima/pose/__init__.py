@@ -12,6 +12,7 @@ from proxima.pose.operator import (
     OperatorTracker,
     body_area,
     body_centre,
+    operator_sight,
     operator_visible,
     selection_score,
 )
@@ -27,6 +28,7 @@ __all__ = [
     "body_area",
     "body_centre",
     "from_mediapipe",
+    "operator_sight",
     "operator_visible",
     "resolve_pose_model",
     "selection_score",

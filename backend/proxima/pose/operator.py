@@ -13,8 +13,9 @@ Selection (`OperatorTracker`):
   with the time since they were last seen. Nobody inside the gate means "operator not
   found" (None), never a switch to someone else; `unlock()` (on disarm) ends the lock.
 
-Visibility (`operator_visible`): see its docstring. Feet count because the paper's
-handover happens when the main drone's camera loses the operator's feet.
+Visibility (`operator_visible`, `operator_sight`): see their docstrings. Feet count
+because the paper's handover happens when the main drone's camera loses the operator's
+feet.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from proxima.pose.one_euro import OneEuroFilter
-from proxima.types import Pose
+from proxima.types import Pose, Sight
 
 SHOULDERS = (11, 12)
 HIPS = (23, 24)
@@ -52,6 +53,20 @@ def operator_visible(
     if seen.mean() < min_fraction:
         return False
     return int(seen[list(FEET)].sum()) >= min_feet
+
+
+def operator_sight(
+    pose: Pose | None, threshold: float = 0.5, min_fraction: float = 0.6, min_feet: int = 3
+) -> Sight:
+    """How well a camera sees the operator: FULL when `operator_visible` holds, PARTIAL
+    when enough landmarks are seen (the same `min_fraction`) but the feet are not, NONE
+    otherwise (no pose, or too few landmarks to read a gesture)."""
+    if pose is None:
+        return Sight.NONE
+    seen = pose.visibility >= threshold
+    if seen.mean() < min_fraction:
+        return Sight.NONE
+    return Sight.FULL if int(seen[list(FEET)].sum()) >= min_feet else Sight.PARTIAL
 
 
 def body_centre(pose: Pose) -> np.ndarray:

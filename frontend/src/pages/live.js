@@ -15,6 +15,8 @@ let seenVersion = -1;
 const tiles = new Map(); // stream -> {el, canvas, ctx, fields}
 
 const pct = (x) => (typeof x === "number" ? `${Math.round(x * 100)}%` : "");
+// What the operator field says for a pose event's `sight` (see proxima.types.Sight).
+const SIGHT_TEXT = { full: "in view", partial: "feet out of view", none: "lost" };
 const fmtTime = (wall) => (wall ? new Date(wall * 1000).toLocaleTimeString() : "");
 
 function el(tag, attrs = {}, ...children) {
@@ -50,7 +52,7 @@ function makeTile(s) {
       field("armed", "control"),
       field("state", "stream"),
       field("link", "link"),
-      field("visible", "operator"),
+      field("sight", "operator"),
     ),
   );
   const ctx = canvas.getContext("2d");
@@ -78,7 +80,7 @@ function renderTileText(s, t) {
   t.f.state.className = `value state s-${lv.state || "none"}`;
   t.f.link.textContent = link || "—";
   t.f.link.className = `value link l-${link || "none"}`;
-  t.f.visible.textContent = lv.visible === undefined ? "—" : lv.visible ? "in view" : "lost";
+  t.f.sight.textContent = SIGHT_TEXT[lv.sight] || "—";
 }
 
 function drawTile(s, t) {
@@ -178,7 +180,7 @@ function frame() {
     if (s.dirty) {
       s.dirty = false;
       drawTile(s, t);
-      t.f.visible.textContent = s.live.visible ? "in view" : "lost";
+      t.f.sight.textContent = SIGHT_TEXT[s.live.sight] || "—";
     }
   }
   raf = requestAnimationFrame(frame);
