@@ -193,6 +193,9 @@ GRID = {
 # The paper's filter of three recognitions is kept (filter_size=3); the release time is
 # refined around the best of the grid.
 REFINE = {"release_s": [1.0, 2.0, 4.0, 6.0]}
+# Then the agreement `land` alone needs (decisions in a row): a wrong land ends a flight,
+# and land_direction's arms-down phase is what the classifier most often takes for land.
+LAND_CONFIRM = [6, 9, 12, 15, 20]
 WRONG_COST = 3.0  # a wrong or spurious command costs as much as this many on-time commands
 
 
@@ -241,6 +244,12 @@ def tune(
         params = {k: best[k] for k in ("threshold", "confirm", "debounce_s")}
         params.update(dict(zip(REFINE, values, strict=True)))
         try_config(best["stride"], params)
+    best = max(rows, key=lambda r: r["utility"])
+    for n in LAND_CONFIRM:
+        params = {k: best[k] for k in ("threshold", "confirm", "debounce_s")}
+        params["release_s"] = best.get("release_s", base.release_s)
+        if n > params["confirm"]:
+            try_config(best["stride"], {**params, "confirm_by_command": {"land": n}})
     rows.sort(key=lambda r: -r["utility"])
     return rows[0], rows
 
@@ -366,7 +375,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         control = control.model_copy(
             update={
                 k: best[k]
-                for k in ("threshold", "confirm", "debounce_s", "filter_size", "release_s")
+                for k in (
+                    "threshold",
+                    "confirm",
+                    "debounce_s",
+                    "filter_size",
+                    "release_s",
+                    "confirm_by_command",
+                )
                 if k in best
             }
         )
@@ -398,7 +414,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         # streams: what avoiding wrong commands costs in latency.
         params = {
             k: cautious[k]
-            for k in ("threshold", "confirm", "debounce_s", "release_s")
+            for k in ("threshold", "confirm", "debounce_s", "release_s", "confirm_by_command")
             if k in cautious
         }
         cautious_control = control.model_copy(update=params)

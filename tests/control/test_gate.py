@@ -1,5 +1,7 @@
 """The debounce gate on explicit sequences of filtered actions."""
 
+import pytest
+
 from proxima.control import CommandGate
 
 
@@ -70,3 +72,15 @@ def test_refused_action_changes_nothing() -> None:
     seq = ticks(0, 1, "move_to_left") + ticks(1, 3, "have_command")
     # move_to_left is refused, so it starts no debounce: have_command fires at once.
     assert run(gate, seq, only_arm) == [(1.0, "have_command")]
+
+
+def test_land_can_ask_for_a_longer_agreement_than_other_commands() -> None:
+    gate = CommandGate(debounce_s=0.0, confirm=1, confirm_by_command={"land": 4})
+    # land_direction's arms-down phase looks like land for three decisions: no command.
+    seq = [*ticks(0, 1, "hover"), *ticks(1, 1.75, "land"), *ticks(1.75, 3, "hover")]
+    assert run(gate, seq) == [(0.0, "hover")]
+    # Held for the fourth decision, land fires then; hover still fires at once.
+    gate = CommandGate(debounce_s=0.0, confirm=1, confirm_by_command={"land": 4})
+    assert run(gate, ticks(0, 2, "land")) == [(0.75, "land")]
+    with pytest.raises(ValueError, match="land must be >= 1"):
+        CommandGate(confirm_by_command={"land": 0})

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from proxima.gesture.augment import mirror, rotate
+from proxima.gesture.augment import mirror, rotate, time_warp
 from proxima.gesture.features import BodyPipeline, PaperPipeline
 from proxima.gesture.geometry import rotation_matrix, to_metric
 from proxima.gesture.windows import make_windows
@@ -60,3 +60,20 @@ def test_rotation_stays_within_range_and_keeps_bone_lengths(laser_clips) -> None
     bone = lambda x: np.linalg.norm(x[..., 13, :] - x[..., 15, :], axis=-1)  # noqa: E731
     np.testing.assert_allclose(bone(r), bone(m), rtol=1e-4, atol=1e-5)
     assert not np.allclose(r, m)
+
+
+def test_time_warp_replays_windows_at_another_speed(laser_clips) -> None:
+    # A clock for a window: every coordinate of frame t is t, so the warped values are
+    # the (fractional) frame times each output frame was sampled at.
+    clock = np.broadcast_to(np.arange(60.0)[None, :, None, None], (500, 60, 33, 3))
+    sampled = time_warp(clock, np.random.default_rng(0), 0.3)[:, :, 0, 0]
+    assert sampled.min() >= 0 and sampled.max() <= 59
+    speed = np.diff(sampled, axis=1)
+    inside = (sampled[:, 1:] > 0) & (sampled[:, 1:] < 59) & (sampled[:, :-1] > 0)
+    per_window = [np.median(v[k]) for v, k in zip(speed, inside, strict=True) if k.any()]
+    assert min(per_window) >= 0.7 - 1e-9 and max(per_window) <= 1.3 + 1e-9
+    assert max(per_window) - min(per_window) > 0.4  # speeds vary from window to window
+    w = _windows(laser_clips)
+    m = to_metric(w.xyz, w.aspect)
+    warped = time_warp(m, np.random.default_rng(1), 0.2)
+    assert warped.shape == m.shape and not np.allclose(warped, m)

@@ -27,6 +27,11 @@ class ControlSettings(BaseModel):
     confirm: int = Field(
         1, ge=1, description="consecutive filtered decisions that must agree before a command"
     )
+    confirm_by_command: dict[str, int] = Field(
+        default_factory=dict,
+        description="per-command `confirm`, e.g. {'land': 12}: a command that ends the "
+        "flight may ask for a longer agreement than the others",
+    )
     debounce_s: float = Field(3.0, ge=0.0, description="least time between two commands")
     release_s: float = Field(
         4.0,

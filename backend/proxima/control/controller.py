@@ -51,7 +51,11 @@ class CommandController:
         self.drone = drone
         self.arbiter = PriorityArbiter(streams, hold_s=s.hold_s, regain_s=s.regain_s)
         self.gate = CommandGate(
-            debounce_s=s.debounce_s, confirm=s.confirm, release_s=s.release_s, repeat_s=s.repeat_s
+            debounce_s=s.debounce_s,
+            confirm=s.confirm,
+            release_s=s.release_s,
+            repeat_s=s.repeat_s,
+            confirm_by_command=s.confirm_by_command,
         )
         self.arming = Arming(idle_disarm_s=s.idle_disarm_s)
         self.now = float("-inf")

@@ -1,7 +1,8 @@
 """Debounce between commands: when a filtered action becomes a command.
 
 A command fires on the rising edge of an action: the filter names a new action, it has
-held for `confirm` decisions, and at least `debounce_s` passed since the previous command.
+held for `confirm` decisions (or its own count in `confirm_by_command`: a wrong `land`
+costs more than a late one), and at least `debounce_s` passed since the previous command.
 Holding a gesture sends its command once (or every `repeat_s` if set); the same command
 fires again only after the action was gone for `release_s`. A command held back by the
 debounce is not lost: it fires as soon as the wait ends if the action is still there.
@@ -9,7 +10,7 @@ debounce is not lost: it fires as soon as the wait ends if the action is still t
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 
 class CommandGate:
@@ -21,9 +22,12 @@ class CommandGate:
         confirm: int = 1,
         release_s: float = 2.0,
         repeat_s: float | None = None,
+        confirm_by_command: Mapping[str, int] | None = None,
     ) -> None:
-        if confirm < 1:
-            raise ValueError(f"confirm must be >= 1, got {confirm}")
+        self.confirm_by_command = dict(confirm_by_command or {})
+        for name, n in {"confirm": confirm, **self.confirm_by_command}.items():
+            if n < 1:
+                raise ValueError(f"{name} must be >= 1, got {n}")
         self.debounce_s = debounce_s
         self.confirm = confirm
         self.release_s = release_s
@@ -56,7 +60,7 @@ class CommandGate:
                 if t - self._gone_since >= self.release_s:
                     self.latched = None
                     self._gone_since = None
-        if not action or self._streak < self.confirm:
+        if not action or self._streak < self.confirm_by_command.get(action, self.confirm):
             return None
         if self.last_fire_t is not None and t - self.last_fire_t < self.debounce_s:
             return None

@@ -3,6 +3,10 @@
 - The paper's rotation: -15..15 degrees about x, y and z, about the hips' centre.
 - Yaw (rotation about the vertical axis) by a wider angle to imitate other camera views;
   only for windows with depth (LASER), since turning a flat 2D skeleton is meaningless.
+- Time warp: each window replayed at a random speed (1 +- `max_change`) about its
+  centre, with a small random shift, by linear interpolation between frames; frames
+  that would fall outside the window repeat its edge. Operators repeat a gesture at
+  their own pace, and the test part of a clip is often slower or faster than the start.
 - Left-right mirroring: x -> -x with each landmark swapped for its twin. Mirroring turns
   the operator's left arm into the right one, so the labels that name a side swap:
   move_to_left <-> move_to_right. The right-handed gestures (all_clear, have_command,
@@ -29,6 +33,20 @@ def mirror(metric: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarr
     out = metric[:, :, MIRROR, :].copy()
     out[..., 0] = 2 * centre[..., 0] - out[..., 0]
     return out, MIRROR_LABEL[labels]
+
+
+def time_warp(metric: np.ndarray, rng: np.random.Generator, max_change: float = 0.2) -> np.ndarray:
+    """Resample each window (N, W, ...) at a random speed in [1 - max_change,
+    1 + max_change] about its centre, shifted by up to 10% of the window."""
+    n, w = metric.shape[:2]
+    speed = rng.uniform(1 - max_change, 1 + max_change, size=(n, 1))
+    shift = rng.uniform(-0.1, 0.1, size=(n, 1)) * w
+    t = np.clip((np.arange(w) - w / 2) * speed + w / 2 + shift, 0, w - 1)
+    lo = np.floor(t).astype(np.int64)
+    hi = np.minimum(lo + 1, w - 1)
+    frac = (t - lo).reshape(n, w, *([1] * (metric.ndim - 2)))
+    rows = np.arange(n)[:, None]
+    return metric[rows, lo] * (1 - frac) + metric[rows, hi] * frac
 
 
 def rotate(

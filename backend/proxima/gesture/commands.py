@@ -37,8 +37,8 @@ def train(
     pipeline: Annotated[
         str | None, typer.Option(help="paper or body (default: the model's).")
     ] = None,
-    epochs: int = 40,
-    patience: int = 10,
+    epochs: int = 60,
+    patience: int = 15,
     stride: Annotated[int, typer.Option(help="Frames between training windows.")] = 4,
     max_gap: Annotated[
         int, typer.Option(help="Longest gap (missing frames) a window may span.")
@@ -47,6 +47,10 @@ def train(
     threads: Annotated[int, typer.Option(help="Torch threads.")] = 2,
     yaw: Annotated[float, typer.Option(help="Extra yaw augmentation, degrees.")] = 30.0,
     mirror: Annotated[bool, typer.Option(help="Left-right mirroring augmentation.")] = False,
+    time_warp: Annotated[
+        float | None,
+        typer.Option(help="Time-warp augmentation: +- change of speed; 0 = off. [default: 0.2]"),
+    ] = None,
 ) -> None:
     """Train a gesture model on a split's training part and save one self-contained file."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -57,6 +61,8 @@ def train(
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
                       seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror)  # fmt: skip
+    if time_warp is not None:
+        cfg.time_warp = time_warp
     command = "proxima " + shlex.join(sys.argv[1:])
     with Progress(
         TextColumn("[bold]train[/]"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
@@ -129,10 +135,11 @@ def protocols(
         typer.Option(help="Score temporal/cross-view on this data only (e.g. laser)."),
     ] = None,
     model: str = "tcn",
-    epochs: int = 40,
+    epochs: int = 60,
     stride: int = 4,
     seed: int = 0,
     threads: int = 2,
+    time_warp: Annotated[float | None, typer.Option(help="As for train.")] = None,
 ) -> None:
     """Train and score a model on each evaluation protocol; print the results table."""
     from rich.progress import Progress
@@ -148,6 +155,8 @@ def protocols(
 
     splits = split or [*LASER_PROTOCOLS, *UAV_PROTOCOLS]
     cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads)
+    if time_warp is not None:
+        cfg.time_warp = time_warp
     rows_so_far: list[dict] = []
     with Progress() as progress:
         task = progress.add_task("protocols", total=len(splits))
