@@ -3,7 +3,10 @@
 from proxima.control import CommandController, ControlSettings, Sight, StreamUpdate
 from proxima.events import ArmingEvent, CommandEvent, HandoverEvent
 
-SETTINGS = ControlSettings(debounce_s=1.0, confirm=1, release_s=1.0, hold_s=1.0, regain_s=0.0)
+# Every command on its first filtered decision (no longer agreement for land here).
+SETTINGS = ControlSettings(
+    debounce_s=1.0, confirm=1, confirm_by_command={}, release_s=1.0, hold_s=1.0, regain_s=0.0
+)
 
 
 def segment(stream: str, start: float, stop: float, action: str, sight: Sight = Sight.FULL) -> list:

@@ -35,6 +35,7 @@ def control_settings(settings: Settings) -> Any:
         "debounce_s": "debounce_s",
         "arming_timeout_s": "idle_disarm_s",
         "handover_hold_s": "hold_s",
+        "confirm_by_command": "confirm_by_command",
     }
     overrides = {
         theirs: getattr(r, ours) for ours, theirs in names.items() if getattr(r, ours) is not None

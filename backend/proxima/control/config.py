@@ -22,13 +22,13 @@ class ControlSettings(BaseModel):
 
     filter_size: int = Field(3, ge=1, description="recognitions in the moving average")
     threshold: float = Field(
-        0.8, ge=0.0, le=1.0, description="averaged probability an action needs"
+        0.9, ge=0.0, le=1.0, description="averaged probability an action needs"
     )
     confirm: int = Field(
         1, ge=1, description="consecutive filtered decisions that must agree before a command"
     )
     confirm_by_command: dict[str, int] = Field(
-        default_factory=dict,
+        default_factory=lambda: {"land": 9},
         description="per-command `confirm`, e.g. {'land': 12}: a command that ends the "
         "flight may ask for a longer agreement than the others",
     )

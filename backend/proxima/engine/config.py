@@ -30,7 +30,7 @@ class EngineSettings(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     stride: int = Field(
-        3, ge=1, description="classify the window every `stride` frames (tuned at 30 fps)"
+        5, ge=1, description="classify the window every `stride` frames (tuned at 30 fps)"
     )
     max_gap_s: float = Field(
         0.25,
