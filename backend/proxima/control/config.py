@@ -14,7 +14,7 @@ class ControlSettings(BaseModel):
 
     The paper averages three recognitions and waits 10 s between commands (10.4 s
     response); the defaults keep its three-recognition filter and were chosen by the
-    latency benchmark on held-out data (median onset -> command 1.6 s; see
+    latency benchmark on held-out data (median onset -> command 1.8 s; see
     docs/recognition.md for the figures and what they miss).
     """
 
