@@ -29,7 +29,7 @@ class ControlSettings(BaseModel):
     )
     confirm_by_command: dict[str, int] = Field(
         default_factory=lambda: {"land": 9},
-        description="per-command `confirm`, e.g. {'land': 12}: a command that ends the "
+        description="per-command `confirm`, e.g. {'land': 9}: a command that ends the "
         "flight may ask for a longer agreement than the others",
     )
     debounce_s: float = Field(3.0, ge=0.0, description="least time between two commands")

@@ -47,12 +47,7 @@ def operator_visible(
     are the ones whose feet lie below the image edge (y > 1), so the test catches a
     camera that has lost the operator's feet. No pose (None) is not visible.
     """
-    if pose is None:
-        return False
-    seen = pose.visibility >= threshold
-    if seen.mean() < min_fraction:
-        return False
-    return int(seen[list(FEET)].sum()) >= min_feet
+    return operator_sight(pose, threshold, min_fraction, min_feet) == Sight.FULL
 
 
 def operator_sight(
