@@ -125,16 +125,21 @@ def simulate(
             result = run_sim(cfg, store=store, on_round=bar.round, on_status=bar.status)
         except RuntimeError as exc:
             _fail(str(exc))
-    out = result.to_json()
+    _report(result.to_json(), json_out, png, f"{cfg.strategy}, {cfg.partition}")
+
+
+def _report(out: dict[str, Any], json_out: Path | None, png: Path | None, what: str) -> None:
+    """Write the run record and its learning curve, print the summary; exit 1 unless the
+    run completed."""
     if json_out is not None:
         json_out.parent.mkdir(parents=True, exist_ok=True)
         json_out.write_text(json.dumps(out, indent=1))
     if png is not None:
         from proxima.federated.curve import plot_curve
 
-        plot_curve(result.rounds, png, f"run {result.run_id} ({cfg.strategy}, {cfg.partition})")
+        plot_curve(out["rounds"], png, f"run {out['run_id']} ({what})")
     _summary(out, json_out, png)
-    if result.status != "completed":
+    if out["status"] != "completed":
         raise typer.Exit(1)
 
 
@@ -215,16 +220,7 @@ def deploy_local(
            "model_card": run["model_card"], "flwr_run_id": run["flwr_run_id"],
            "wall_s": (run["finished_at"] or 0) - (run["started_at"] or 0),
            "config": run["params"]}  # fmt: skip
-    if json_out is not None:
-        json_out.parent.mkdir(parents=True, exist_ok=True)
-        json_out.write_text(json.dumps(out, indent=1))
-    if png is not None:
-        from proxima.federated.curve import plot_curve
-
-        plot_curve(run["rounds"], png, f"run {run_id} (deployment, {cfg.strategy})")
-    _summary(out, json_out, png)
-    if run["status"] != "completed":
-        raise typer.Exit(1)
+    _report(out, json_out, png, f"deployment, {cfg.strategy}")
 
 
 def curve(
