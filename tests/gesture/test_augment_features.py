@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from proxima.gesture.augment import mirror, rotate, time_warp
+from proxima.gesture.augment import mirror, rotate, time_warp, transitions
 from proxima.gesture.features import BodyPipeline, PaperPipeline
 from proxima.gesture.geometry import rotation_matrix, to_metric
 from proxima.gesture.windows import make_windows
@@ -77,3 +77,28 @@ def test_time_warp_replays_windows_at_another_speed(laser_clips) -> None:
     m = to_metric(w.xyz, w.aspect)
     warped = time_warp(m, np.random.default_rng(1), 0.2)
     assert warped.shape == m.shape and not np.allclose(warped, m)
+
+
+def test_transitions_join_two_gestures_of_one_scene(laser_clips) -> None:
+    w = make_windows([c for c in laser_clips if c.view in ("f", "l")], stride=100)
+    m = to_metric(w.xyz, w.aspect)
+    out = transitions(m, w.labels, w.scene, np.random.default_rng(0), rate=1.0)
+    assert out.shape == m.shape
+    joined = 0
+    for i in range(len(m)):
+        # Each window now ends with its own first frames (half of it at least) ...
+        new = next(n for n in range(60, 0, -1) if np.allclose(out[i, 60 - n :], m[i, :n]))
+        assert 30 <= new < 60
+        before = 60 - new - min(15, 60 - new)  # what precedes the 0.5 s move
+        if not before:
+            continue
+        # ... after the last frames of a window of another gesture from the same camera.
+        donors = [
+            j for j in range(len(m))
+            if w.scene[j] == w.scene[i] and w.labels[j] != w.labels[i]
+            and np.allclose(m[j, 60 - before :], out[i, :before])
+        ]  # fmt: skip
+        assert donors, f"window {i} does not start inside another gesture of its scene"
+        joined += 1
+    assert joined > len(m) // 4
+    assert set(w.scene) == {"laser/laser/f", "laser/laser/l"}

@@ -233,6 +233,7 @@ def _concat(a: Windows, b: Windows) -> Windows:
         np.concatenate([a.has_z, b.has_z]),
         a.clip_names + b.clip_names,
         a.skipped + b.skipped,
+        None if a.scene is None or b.scene is None else np.concatenate([a.scene, b.scene]),
     )
 
 

@@ -7,6 +7,12 @@
   centre, with a small random shift, by linear interpolation between frames; frames
   that would fall outside the window repeat its edge. Operators repeat a gesture at
   their own pace, and the test part of a clip is often slower or faster than the start.
+- Transitions: a window replaced by the onset of its gesture as a live stream shows it,
+  the end of another gesture of the same recording (same person and camera), a smooth
+  0.5 s move from its last pose, then the first half or more of this window; the label
+  stays this window's. Training windows are otherwise always one gesture from edge to
+  edge, while a live window at a gesture's start still holds the one before: seeing
+  such windows lets the model name the new gesture sooner and with more confidence.
 - Left-right mirroring: x -> -x with each landmark swapped for its twin. Mirroring turns
   the operator's left arm into the right one, so the labels that name a side swap:
   move_to_left <-> move_to_right. The right-handed gestures (all_clear, have_command,
@@ -66,3 +72,35 @@ def rotate(
     rot = np.stack([rotation_matrix(*a) for a in angles])  # (N, 3, 3)
     centre = hip_centre(metric).mean(axis=1, keepdims=True)  # (N, 1, 1, 3)
     return np.einsum("nwjc,nkc->nwjk", metric - centre, rot) + centre
+
+
+def transitions(
+    metric: np.ndarray,
+    labels: np.ndarray,
+    scene: np.ndarray,
+    rng: np.random.Generator,
+    rate: float,
+    transition: int = 15,
+    min_share: float = 0.5,
+) -> np.ndarray:
+    """Replace a `rate` share of windows (N, W, ...) by a gesture onset: the last frames
+    of a window of another gesture from the same scene, `transition` frames of linear
+    move, then this window's first `min_share`..100% of frames. Labels are unchanged."""
+    n, w = metric.shape[:2]
+    out = metric.copy()
+    by_scene = {s: np.flatnonzero(scene == s) for s in np.unique(scene)}
+    for i in np.flatnonzero(rng.random(n) < rate):
+        pool = by_scene[scene[i]]
+        pool = pool[labels[pool] != labels[i]]
+        if not len(pool):
+            continue
+        j = pool[rng.integers(len(pool))]
+        new = int(rng.integers(round(min_share * w), w))
+        move = min(transition, w - new)
+        before = w - new - move
+        frac = (np.arange(1, move + 1) / (move + 1)).reshape(-1, *([1] * (metric.ndim - 2)))
+        src, dst = metric[j, -1], metric[i, 0]
+        out[i, :before] = metric[j, w - before :]
+        out[i, before : before + move] = src + frac * (dst - src)
+        out[i, before + move :] = metric[i, :new]
+    return out

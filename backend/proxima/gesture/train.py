@@ -18,7 +18,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from proxima.gesture.augment import mirror, rotate, time_warp
+from proxima.gesture.augment import mirror, rotate, time_warp, transitions
 from proxima.gesture.features import Pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.windows import Windows
@@ -40,6 +40,7 @@ class TrainConfig:
     rotate_deg: float = 15.0  # the paper's augmentation
     yaw_deg: float = 30.0  # extra yaw for windows with depth
     time_warp: float = 0.2  # +- change of speed (0.8x to 1.2x); 0 = off
+    transitions: float = 0.0  # share of windows turned into a gesture onset; 0 = off
     mirror: bool = False  # off: on the temporal split it cost 2 points (0.925 -> 0.903)
     label_smoothing: float = 0.05
     threads: int = 2
@@ -66,6 +67,8 @@ def augmented(
 ) -> tuple[np.ndarray, np.ndarray]:
     """One epoch's augmented features and labels from precomputed metric windows."""
     labels = w.labels
+    if cfg.transitions and w.scene is not None:
+        metric = transitions(metric, labels, w.scene, rng, cfg.transitions)
     if cfg.time_warp:
         metric = time_warp(metric, rng, cfg.time_warp)
     if cfg.rotate_deg or cfg.yaw_deg:

@@ -34,6 +34,9 @@ class Windows:
     has_z: np.ndarray
     clip_names: list[str] = field(default_factory=list)
     skipped: int = 0  # windows not cut because they would span a long gap
+    # (N,) the recording each window comes from ("source/subject/view"): one person
+    # before one camera, so its windows may be joined into transitions (augment.py).
+    scene: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.labels)
@@ -48,6 +51,7 @@ class Windows:
             self.has_z[idx],
             self.clip_names,
             0,
+            None if self.scene is None else self.scene[idx],
         )
 
 
@@ -77,7 +81,7 @@ def make_windows(
 ) -> Windows:
     """Cut windows from clip parts (each part's rows are contiguous in its clip)."""
     names = clip_names if clip_names is not None else []
-    xyz, vis, labels, clip_ix, aspect, has_z = [], [], [], [], [], []
+    xyz, vis, labels, clip_ix, aspect, has_z, scene = [], [], [], [], [], [], []
     skipped = 0
     for part in parts:
         if part.name not in names:
@@ -93,6 +97,7 @@ def make_windows(
         clip_ix += [ci] * n
         aspect += [part.aspect] * n
         has_z += [part.has_z] * n
+        scene += [f"{part.source}/{part.subject}/{part.view}"] * n
     if not xyz:
         empty = np.zeros((0, window, 33), np.float32)
         return Windows(
@@ -114,6 +119,7 @@ def make_windows(
         np.asarray(has_z, bool),
         names,
         skipped,
+        np.asarray(scene),
     )
 
 
