@@ -52,9 +52,8 @@ def train(
         typer.Option(help="Time-warp augmentation: +- change of speed; 0 = off. [default: 0.2]"),
     ] = None,
     transitions: Annotated[
-        float | None,
-        typer.Option(help="Share of windows turned into gesture onsets, e.g. 0.3; 0 = off. [default: 0]"),
-    ] = None,
+        float, typer.Option(help="Share of windows turned into gesture onsets (e.g. 0.3).")
+    ] = 0.0,
 ) -> None:
     """Train a gesture model on a split's training part and save one self-contained file."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -67,8 +66,7 @@ def train(
                       seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
-    if transitions is not None:
-        cfg.transitions = transitions
+    cfg.transitions = transitions
     command = "proxima " + shlex.join(sys.argv[1:])
     with Progress(
         TextColumn("[bold]train[/]"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
@@ -146,7 +144,7 @@ def protocols(
     seed: int = 0,
     threads: int = 2,
     time_warp: Annotated[float | None, typer.Option(help="As for train.")] = None,
-    transitions: Annotated[float | None, typer.Option(help="As for train.")] = None,
+    transitions: Annotated[float, typer.Option(help="As for train.")] = 0.0,
 ) -> None:
     """Train and score a model on each evaluation protocol; print the results table."""
     from rich.progress import Progress
@@ -164,8 +162,7 @@ def protocols(
     cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads)
     if time_warp is not None:
         cfg.time_warp = time_warp
-    if transitions is not None:
-        cfg.transitions = transitions
+    cfg.transitions = transitions
     rows_so_far: list[dict] = []
     with Progress() as progress:
         task = progress.add_task("protocols", total=len(splits))
