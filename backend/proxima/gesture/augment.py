@@ -8,7 +8,7 @@
   that would fall outside the window repeat its edge. Operators repeat a gesture at
   their own pace, and the test part of a clip is often slower or faster than the start.
 - Transitions: a window replaced by the onset of its gesture as a live stream shows it,
-  the end of another gesture of the same recording (same person and camera), a smooth
+  the end of another gesture of the same recording (same person and camera), a linear
   0.5 s move from its last pose, then the first half or more of this window; the label
   stays this window's. Training windows are otherwise always one gesture from edge to
   edge, while a live window at a gesture's start still holds the one before: seeing
