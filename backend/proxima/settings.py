@@ -127,6 +127,7 @@ class RecognitionSettings(_Section):
     debounce_s: float | None = Field(None, ge=0)
     arming_timeout_s: float | None = Field(None, gt=0, description="idle time to disarm")
     handover_hold_s: float | None = Field(None, ge=0)
+    confirm: int | None = Field(None, ge=1, description="decisions in a row before a command")
     confirm_by_command: dict[str, int] | None = Field(
         None, description="decisions a command needs in a row, e.g. {land = 9}: safer landings"
     )

@@ -35,6 +35,7 @@ def control_settings(settings: Settings) -> Any:
         "debounce_s": "debounce_s",
         "arming_timeout_s": "idle_disarm_s",
         "handover_hold_s": "hold_s",
+        "confirm": "confirm",
         "confirm_by_command": "confirm_by_command",
     }
     overrides = {
