@@ -36,6 +36,11 @@ class Clip:
     def __len__(self) -> int:
         return len(self.frames)
 
+    @property
+    def scene(self) -> str:
+        """The recording it belongs to: one person before one camera."""
+        return f"{self.source}/{self.subject}/{self.view}"
+
     def slice(self, start: int, stop: int) -> Clip:
         """Rows start:stop as a new clip (same metadata)."""
         return Clip(

@@ -34,8 +34,8 @@ class Windows:
     has_z: np.ndarray
     clip_names: list[str] = field(default_factory=list)
     skipped: int = 0  # windows not cut because they would span a long gap
-    # (N,) the recording each window comes from ("source/subject/view"): one person
-    # before one camera, so its windows may be joined into transitions (augment.py).
+    # (N,) each window's `Clip.scene`: windows of one scene (one person before one
+    # camera) may be joined into transitions (augment.py).
     scene: np.ndarray | None = None
 
     def __len__(self) -> int:
@@ -97,7 +97,7 @@ def make_windows(
         clip_ix += [ci] * n
         aspect += [part.aspect] * n
         has_z += [part.has_z] * n
-        scene += [f"{part.source}/{part.subject}/{part.view}"] * n
+        scene += [part.scene] * n
     if not xyz:
         empty = np.zeros((0, window, 33), np.float32)
         return Windows(
