@@ -44,7 +44,7 @@ from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.scoring import Score, score_commands
 from proxima.engine.stitch import StitchedStream, random_plan, stitch_views
 from proxima.events import ArmingEvent, CommandEvent, EventBus
-from proxima.pose import operator_visible
+from proxima.pose import operator_sight
 from proxima.types import Pose
 
 VIEWS = ("f", "l", "r")
@@ -102,11 +102,7 @@ def sights(stream: StitchedStream) -> np.ndarray:
     t = (stream.frames - 1) / stream.fps
     return np.array(
         [
-            Sight.FULL
-            if operator_visible(
-                Pose(t=float(t[i]), xyz=stream.xyz[i], visibility=stream.visibility[i])
-            )
-            else Sight.PARTIAL
+            operator_sight(Pose(t=float(t[i]), xyz=stream.xyz[i], visibility=stream.visibility[i]))
             for i in range(len(t))
         ]
     )
