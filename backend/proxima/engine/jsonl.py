@@ -11,7 +11,6 @@ import json
 import queue
 import threading
 from pathlib import Path
-from types import TracebackType
 
 from proxima.events import EventBus
 from proxima.types import Event
@@ -59,10 +58,5 @@ class JsonlWriter:
     def __enter__(self) -> JsonlWriter:
         return self
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()

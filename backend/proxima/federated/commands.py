@@ -18,6 +18,19 @@ Rounds = Annotated[int, typer.Option(help="Federated rounds.")]
 DbOpt = Annotated[
     Path | None, typer.Option(help="SQLite database for runs (default: the console's).")
 ]
+# Options `simulate` and `deploy-local` share (None: the run config's default).
+JsonOut = Annotated[Path | None, typer.Option("--json", help="Write the run record here.")]
+PngOut = Annotated[Path | None, typer.Option(help="Write the learning curve here.")]
+LocalEpochs = Annotated[int | None, typer.Option(help="Local epochs a round.")]
+Strategy = Annotated[str | None, typer.Option(help="fedavg | fedprox | fedadam | fedavgm")]
+Partition = Annotated[str | None, typer.Option(help="view | iid | dirichlet")]
+MinClients = Annotated[int | None, typer.Option(help="Drones a round needs.")]
+Stride = Annotated[int | None, typer.Option(help="Frames between training windows.")]
+DataOpt = Annotated[str | None, typer.Option(help="Data folder(s), ';'-separated.")]
+SetOpt = Annotated[
+    list[str] | None, typer.Option("--set", help="Any run-config key: --set batch-size=32")
+]
+ModelsDir = Annotated[Path | None, typer.Option(help="Where the global model is saved.")]
 
 
 def _fail(message: str) -> None:
@@ -86,27 +99,19 @@ class _Progress:
 
 def simulate(
     rounds: Rounds = 5,
-    json_out: Annotated[
-        Path | None, typer.Option("--json", help="Write rounds + wall_s here.")
-    ] = None,
-    png: Annotated[Path | None, typer.Option(help="Write the learning curve here.")] = None,
+    json_out: JsonOut = None,
+    png: PngOut = None,
     drones: Annotated[int, typer.Option(help="Virtual drones (SuperNodes).")] = 3,
-    local_epochs: Annotated[int | None, typer.Option(help="Local epochs a round.")] = None,
-    strategy: Annotated[
-        str | None, typer.Option(help="fedavg | fedprox | fedadam | fedavgm")
-    ] = None,
-    partition: Annotated[str | None, typer.Option(help="view | iid | dirichlet")] = None,
-    min_clients: Annotated[int | None, typer.Option(help="Drones a round needs.")] = None,
-    stride: Annotated[int | None, typer.Option(help="Frames between training windows.")] = None,
+    local_epochs: LocalEpochs = None,
+    strategy: Strategy = None,
+    partition: Partition = None,
+    min_clients: MinClients = None,
+    stride: Stride = None,
     seed: Annotated[int | None, typer.Option()] = None,
-    data: Annotated[str | None, typer.Option(help="Data folder(s), ';'-separated.")] = None,
-    set_: Annotated[
-        list[str] | None, typer.Option("--set", help="Any run-config key: --set batch-size=32")
-    ] = None,
+    data: DataOpt = None,
+    set_: SetOpt = None,
     db: DbOpt = None,
-    models_dir: Annotated[
-        Path | None, typer.Option(help="Where the global model is saved.")
-    ] = None,
+    models_dir: ModelsDir = None,
     save: Annotated[bool, typer.Option(help="Save the global model and its card.")] = True,
 ) -> None:
     """Run on Flower's simulation engine (one process; a virtual SuperNode per drone)."""
@@ -157,26 +162,18 @@ def _summary(out: dict[str, Any], json_out: Path | None, png: Path | None) -> No
 
 def deploy_local(
     rounds: Rounds = 5,
-    json_out: Annotated[
-        Path | None, typer.Option("--json", help="Write the run record here.")
-    ] = None,
-    png: Annotated[Path | None, typer.Option(help="Write the learning curve here.")] = None,
+    json_out: JsonOut = None,
+    png: PngOut = None,
     drones: Annotated[int, typer.Option(help="SuperNodes to start (one per drone).")] = 3,
-    local_epochs: Annotated[int | None, typer.Option(help="Local epochs a round.")] = None,
-    strategy: Annotated[
-        str | None, typer.Option(help="fedavg | fedprox | fedadam | fedavgm")
-    ] = None,
-    partition: Annotated[str | None, typer.Option(help="view | iid | dirichlet")] = None,
-    min_clients: Annotated[int | None, typer.Option(help="Drones a round needs.")] = None,
-    stride: Annotated[int | None, typer.Option(help="Frames between training windows.")] = None,
-    data: Annotated[str | None, typer.Option(help="Data folder(s), ';'-separated.")] = None,
-    set_: Annotated[
-        list[str] | None, typer.Option("--set", help="Any run-config key: --set batch-size=32")
-    ] = None,
+    local_epochs: LocalEpochs = None,
+    strategy: Strategy = None,
+    partition: Partition = None,
+    min_clients: MinClients = None,
+    stride: Stride = None,
+    data: DataOpt = None,
+    set_: SetOpt = None,
     db: DbOpt = None,
-    models_dir: Annotated[
-        Path | None, typer.Option(help="Where the global model is saved.")
-    ] = None,
+    models_dir: ModelsDir = None,
     workdir: Annotated[Path | None, typer.Option(help="Logs and Flower state.")] = None,
 ) -> None:
     """Run on Flower's deployment engine: a SuperLink and one SuperNode per drone as

@@ -8,7 +8,6 @@ way the `OperatorTracker` picks, follows and smooths the operator.
 from __future__ import annotations
 
 from pathlib import Path
-from types import TracebackType
 
 from proxima.pose.estimator import PoseEstimator
 from proxima.pose.operator import OperatorTracker
@@ -64,10 +63,5 @@ class OperatorPoser:
     def __enter__(self) -> OperatorPoser:
         return self
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
