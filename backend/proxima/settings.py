@@ -25,6 +25,8 @@ from pydantic_settings import (
     SettingsConfigDict,
 )
 
+from proxima.control.config import ConfirmByCommand
+
 URI_SCHEMES = ("webcam:", "file:", "rtsp://", "rtsps://", "replay:")
 
 # Passwords anyone would try first; refused even when long enough.
@@ -128,7 +130,7 @@ class RecognitionSettings(_Section):
     arming_timeout_s: float | None = Field(None, gt=0, description="idle time to disarm")
     handover_hold_s: float | None = Field(None, ge=0)
     confirm: int | None = Field(None, ge=1, description="decisions in a row before a command")
-    confirm_by_command: dict[str, int] | None = Field(
+    confirm_by_command: ConfirmByCommand | None = Field(
         None, description="decisions a command needs in a row, e.g. {land = 9}: safer landings"
     )
     operator_lost_hover_s: float = Field(5.0, gt=0, description="hover after this long")

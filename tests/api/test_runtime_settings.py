@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from pydantic import ValidationError
 
 from proxima.api.runtime import control_settings
 from proxima.control import ControlSettings
-from proxima.settings import Settings
+from proxima.settings import Settings, SettingsError
 
 
 def test_recognition_overrides_reach_control_settings() -> None:
@@ -20,3 +22,18 @@ def test_recognition_overrides_reach_control_settings() -> None:
     assert control.confirm_by_command == {"land": 12}
     with pytest.raises(ValidationError, match="confirm_by_command"):
         Settings.model_validate({"recognition": {"confirm_by_command": {"land": "x"}}})
+
+
+def test_a_misspelt_gesture_in_confirm_by_command_is_refused(tmp_path: Path) -> None:
+    # Silently ignoring `lnad` would leave land on the shorter default agreement.
+    path = tmp_path / "console.toml"
+    path.write_text("[recognition]\nconfirm_by_command = { lnad = 9 }\n")
+    with pytest.raises(SettingsError) as err:
+        Settings.load(path)
+    msg = str(err.value)
+    assert str(path) in msg and "recognition.confirm_by_command" in msg
+    assert "unknown gesture lnad" in msg
+    with pytest.raises(ValidationError, match="unknown gesture lnad"):
+        ControlSettings(confirm_by_command={"lnad": 9})
+    with pytest.raises(ValidationError, match="greater than or equal to 1"):
+        ControlSettings(confirm_by_command={"land": 0})

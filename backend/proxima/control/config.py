@@ -6,7 +6,25 @@ the same. Defaults were tuned with `bench/command_latency.py` (see docs/recognit
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field
+from typing import Annotated
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
+
+from proxima.types import GESTURES
+
+
+def _known_gestures(counts: dict[str, int]) -> dict[str, int]:
+    # A misspelt key would otherwise leave that command on the shorter default agreement.
+    unknown = sorted(set(counts) - set(GESTURES))
+    if unknown:
+        raise ValueError(f"unknown gesture {', '.join(unknown)}; known: {', '.join(GESTURES)}")
+    return counts
+
+
+# Per-gesture count of agreeing decisions; keys are gesture names, counts at least 1.
+ConfirmByCommand = Annotated[
+    dict[str, Annotated[int, Field(ge=1)]], AfterValidator(_known_gestures)
+]
 
 
 class ControlSettings(BaseModel):
@@ -28,7 +46,7 @@ class ControlSettings(BaseModel):
     confirm: int = Field(
         2, ge=1, description="consecutive filtered decisions that must agree before a command"
     )
-    confirm_by_command: dict[str, int] = Field(
+    confirm_by_command: ConfirmByCommand = Field(
         default_factory=lambda: {"land": 9},
         description="per-command `confirm`, e.g. {'land': 9}: a command that ends the "
         "flight may ask for a longer agreement than the others",

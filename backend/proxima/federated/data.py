@@ -231,9 +231,9 @@ def _concat(a: Windows, b: Windows) -> Windows:
         np.concatenate([a.clip, b.clip + offset]),
         np.concatenate([a.aspect, b.aspect]),
         np.concatenate([a.has_z, b.has_z]),
+        np.concatenate([a.scene, b.scene]),
         a.clip_names + b.clip_names,
         a.skipped + b.skipped,
-        None if a.scene is None or b.scene is None else np.concatenate([a.scene, b.scene]),
     )
 
 

@@ -63,10 +63,10 @@ def train(
     from proxima.gesture.workflow import train_model
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
-                      seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror)  # fmt: skip
+                      seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
+                      transitions=transitions)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
-    cfg.transitions = transitions
     command = "proxima " + shlex.join(sys.argv[1:])
     with Progress(
         TextColumn("[bold]train[/]"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
@@ -159,10 +159,10 @@ def protocols(
     from proxima.gesture.train import TrainConfig
 
     splits = split or [*LASER_PROTOCOLS, *UAV_PROTOCOLS]
-    cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads)
+    cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads,
+                      transitions=transitions)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
-    cfg.transitions = transitions
     rows_so_far: list[dict] = []
     with Progress() as progress:
         task = progress.add_task("protocols", total=len(splits))

@@ -67,7 +67,7 @@ def augmented(
 ) -> tuple[np.ndarray, np.ndarray]:
     """One epoch's augmented features and labels from precomputed metric windows."""
     labels = w.labels
-    if cfg.transitions and w.scene is not None:
+    if cfg.transitions:
         metric = transitions(metric, labels, w.scene, rng, cfg.transitions)
     if cfg.time_warp:
         metric = time_warp(metric, rng, cfg.time_warp)

@@ -24,7 +24,9 @@ TEMPORAL_TRAIN_FRACTION = 0.7
 @dataclass
 class Windows:
     """A batch of windows. xyz (N, W, 33, 3) normalised; vis (N, W, 33); labels (N,);
-    clip (N,) index into `clip_names`; aspect (N,) and has_z (N,) per window."""
+    clip (N,) index into `clip_names`; aspect (N,), has_z (N,) and scene (N,) per window.
+    `scene` is the window's `Clip.scene` (one person before one camera): windows of one
+    scene may be joined into transitions (augment.py)."""
 
     xyz: np.ndarray
     vis: np.ndarray
@@ -32,11 +34,9 @@ class Windows:
     clip: np.ndarray
     aspect: np.ndarray
     has_z: np.ndarray
+    scene: np.ndarray
     clip_names: list[str] = field(default_factory=list)
     skipped: int = 0  # windows not cut because they would span a long gap
-    # (N,) each window's `Clip.scene`: windows of one scene (one person before one
-    # camera) may be joined into transitions (augment.py).
-    scene: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.labels)
@@ -49,9 +49,9 @@ class Windows:
             self.clip[idx],
             self.aspect[idx],
             self.has_z[idx],
+            self.scene[idx],
             self.clip_names,
             0,
-            None if self.scene is None else self.scene[idx],
         )
 
 
@@ -107,6 +107,7 @@ def make_windows(
             np.zeros(0, np.int64),
             np.zeros(0, np.float32),
             np.zeros(0, bool),
+            np.zeros(0, str),
             names,
             skipped,
         )
@@ -117,9 +118,9 @@ def make_windows(
         np.asarray(clip_ix, np.int64),
         np.asarray(aspect, np.float32),
         np.asarray(has_z, bool),
+        np.asarray(scene),
         names,
         skipped,
-        np.asarray(scene),
     )
 
 
