@@ -493,6 +493,13 @@ class DroneController:
         if self.bus is not None:
             self.bus.publish(event)
 
+    def _alarm(self, drone: str, kind: str, message: str) -> None:
+        # A drone's alarm is also its stream's (the console shows it on that tile);
+        # drone "" is the controller itself.
+        self._publish(
+            DroneAlarmEvent(t=time.time(), stream=drone, drone=drone, kind=kind, message=message)
+        )
+
     # --- watchdog -----------------------------------------------------------------------
     def _watch(self) -> None:
         while not self._stop.wait(0.05):
@@ -501,14 +508,7 @@ class DroneController:
                 self._check_operator()
                 self._check_outcomes()
             except Exception as exc:  # never let the watchdog die silently
-                self._publish(
-                    DroneAlarmEvent(
-                        t=time.time(),
-                        drone="",
-                        kind="controller_error",
-                        message=f"{type(exc).__name__}: {exc}",
-                    )
-                )
+                self._alarm("", "controller_error", f"{type(exc).__name__}: {exc}")
 
     def _check_links(self) -> None:
         for name, link in self.links.items():
@@ -522,15 +522,7 @@ class DroneController:
                 if item is not None:
                     self._outcome(name, item, "link_lost")
                 note = "; gesture control disarmed: have_command again" if armed else ""
-                self._publish(
-                    DroneAlarmEvent(
-                        t=time.time(),
-                        stream=name,
-                        drone=name,
-                        kind="link_lost",
-                        message=f"{name}: link lost, nothing is sent{note}",
-                    )
-                )
+                self._alarm(name, "link_lost", f"{name}: link lost, nothing is sent{note}")
 
     def _check_operator(self) -> None:
         if self._operator_lost_handled or not self.safety.operator_lost():
@@ -541,15 +533,8 @@ class DroneController:
             tel = link.telemetry()
             if not self.safety.is_armed(name) or tel is None or not tel.flying:
                 continue
-            self._publish(
-                DroneAlarmEvent(
-                    t=time.time(),
-                    stream=name,
-                    drone=name,
-                    kind="operator_lost",
-                    message=f"operator not seen for {after:.0f} s: {name} hovers",
-                )
-            )
+            message = f"operator not seen for {after:.0f} s: {name} hovers"
+            self._alarm(name, "operator_lost", message)
             event = CommandEvent(t=time.time(), stream="", command="hover", drone=name)
             threading.Thread(target=self._watchdog_hold, args=(event,), daemon=True).start()
 
@@ -635,15 +620,7 @@ class DroneController:
         drone = req.drone
         self._set_control(drone, False)
         link = self.links[drone]
-        self._publish(
-            DroneAlarmEvent(
-                t=time.time(),
-                stream=drone,
-                drone=drone,
-                kind="emergency_stop",
-                message=f"emergency stop ({req.kind}) confirmed",
-            )
-        )
+        self._alarm(drone, "emergency_stop", f"emergency stop ({req.kind}) confirmed")
         event = CommandEvent(t=time.time(), stream="", command="emergency_stop", drone=drone)
         base = {
             "drone": drone,
