@@ -2,6 +2,7 @@
 // review the recording as a skeleton playback, keep or delete it; the list below shows
 // every sample with its state.
 import { api, isSupervisor, session } from "../api.js";
+import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
 import { on } from "../ws.js";
 
@@ -12,17 +13,6 @@ let offRecording = null;
 let playTimer = 0;
 let current = null; // sample detail under review
 let recordingId = null;
-
-function el(tag, attrs = {}, ...children) {
-  const e = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs)) {
-    if (k === "class") e.className = v;
-    else if (k === "text") e.textContent = v;
-    else e.setAttribute(k, v);
-  }
-  e.append(...children);
-  return e;
-}
 
 const q = (sel) => root.querySelector(sel);
 

@@ -3,6 +3,7 @@
 // beside.
 import { isSupervisor } from "../api.js";
 import { openEstop } from "../estop.js";
+import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
 import { drivingDrone, state, subscribe } from "../store.js";
 
@@ -18,17 +19,6 @@ const pct = (x) => (typeof x === "number" ? `${Math.round(x * 100)}%` : "");
 // What the operator field says for a pose event's `sight` (see proxima.types.Sight).
 const SIGHT_TEXT = { full: "in view", partial: "feet out of view", none: "lost" };
 const fmtTime = (wall) => (wall ? new Date(wall * 1000).toLocaleTimeString() : "");
-
-function el(tag, attrs = {}, ...children) {
-  const e = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs)) {
-    if (k === "class") e.className = v;
-    else if (k === "text") e.textContent = v;
-    else e.setAttribute(k, v);
-  }
-  e.append(...children);
-  return e;
-}
 
 function makeTile(s) {
   const canvas = el("canvas", { width: W, height: H, class: "frame" });

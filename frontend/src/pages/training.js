@@ -10,6 +10,7 @@ import {
   Tooltip,
 } from "chart.js";
 import { api, isSupervisor, session } from "../api.js";
+import { el } from "../dom.js";
 import { on } from "../ws.js";
 
 Chart.register(LineController, LineElement, PointElement, LinearScale, Legend, Tooltip);
@@ -24,16 +25,6 @@ let charts = {};
 let selected = null; // run id shown in the charts
 let offs = [];
 
-function el(tag, attrs = {}, ...children) {
-  const e = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs)) {
-    if (k === "class") e.className = v;
-    else if (k === "text") e.textContent = v;
-    else e.setAttribute(k, v);
-  }
-  e.append(...children);
-  return e;
-}
 const q = (sel) => root.querySelector(sel);
 
 function makeChart(canvas, title, yMax) {
