@@ -99,10 +99,13 @@ def create_app(
     promoter: ModelPromoter | None = None,
     viz_port: int | None = None,
     db_engine: Engine | None = None,
+    live: LiveState | None = None,
     announce: Callable[[str, str], None] = _announce_one_time_password,
 ) -> FastAPI:
     """The console app. Subsystems that are not running are passed as None and their
-    routes answer 503 with the reason.
+    routes answer 503 with the reason. `live` is the bus listener the snapshots come
+    from; pass one made before any publisher started, or a stream's first state (sent
+    once) is missed.
 
     Raises:
         sqlalchemy.exc.SQLAlchemyError: the database cannot be opened or migrated.
@@ -116,7 +119,7 @@ def create_app(
         db_engine=engine,
         sessions=sessions,
         hub=WebSocketHub(bus),
-        live=LiveState(bus),
+        live=live or LiveState(bus),
         recorder=SampleRecorder(bus, sessions),
         training=training,
         estop=estop,

@@ -18,6 +18,7 @@ from fastapi import FastAPI
 from sqlalchemy import Engine
 
 from proxima.api.app import create_app, open_database
+from proxima.api.live import LiveState
 from proxima.events import EventBus
 from proxima.settings import Settings
 
@@ -178,6 +179,8 @@ def build_runtime(
     """
     bus = bus or EventBus()
     db = open_database(settings)  # first: every other part writes to it
+    # Listening before anything publishes: stream and link states are sent on change only.
+    live = LiveState(bus)
     rt = ConsoleRuntime(settings=settings, bus=bus, app=FastAPI())
     estop = None
     if drones and settings.drones:
@@ -234,5 +237,6 @@ def build_runtime(
         promoter=promoter,
         viz_port=rt.view.port if rt.view else None,
         db_engine=db,
+        live=live,
     )
     return rt
