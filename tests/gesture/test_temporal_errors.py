@@ -1,0 +1,50 @@
+"""The temporal-split error analysis (bench/temporal_errors.py): its accuracy is the one
+`proxima evaluate` reports for the same checkpoint, and its wrong stretches are exact."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from bench.temporal_errors import main, nearest_labels, stretches
+from proxima.gesture.workflow import evaluate_checkpoint
+
+SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
+
+
+def test_stretches_are_runs_of_one_wrong_label() -> None:
+    labels = ["a", "b", "c"]
+    truth = np.zeros(9, dtype=int)
+    pred = np.array([0, 1, 1, 2, 0, 0, 2, 2, 0])
+    assert stretches(pred, truth, labels) == [
+        {"start": 1, "length": 2, "predicted": "b"},
+        {"start": 3, "length": 1, "predicted": "c"},
+        {"start": 6, "length": 2, "predicted": "c"},
+    ]
+    assert stretches(truth, truth, labels) == []
+
+
+def test_nearest_labels_finds_the_closest_row() -> None:
+    train = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
+    got = nearest_labels(train, np.array([7, 8, 9]), np.array([[9.0, 1.0], [1.0, 8.0], [0.1, 0]]))
+    assert got.tolist() == [8, 9, 7]
+
+
+def test_analysis_agrees_with_evaluate(small_checkpoint: Path, laser_dir: Path, tmp_path) -> None:
+    out = tmp_path / "errors.json"
+    main(["--checkpoint", str(small_checkpoint), "--checkpoint", str(SHIPPED),
+          "--data", str(laser_dir), "--out", str(out)])  # fmt: skip
+    result = json.loads(out.read_text())
+    assert out.with_suffix(".png").stat().st_size > 10_000
+    evaluated = evaluate_checkpoint(small_checkpoint, [str(laser_dir)], "temporal")
+    assert result["test_windows"] == evaluated["windows"]
+    small, shipped = result["models"]
+    assert abs(small["accuracy"] - evaluated["accuracy"]) < 1e-9
+    assert small["wrong"] > 0  # four coarse epochs leave errors to lay out
+    assert small["wrong"] == sum(c["wrong"][0] for c in result["clips"])
+    assert result["wrong_in_every_model"] <= min(small["wrong"], shipped["wrong"])
+    assert small["wrong_and_nearest_neighbour_agrees"] <= small["wrong_and_nearest_neighbour_wrong"]
+    # One person, same views: the model-free check is far above chance (1/13).
+    assert 0.5 < result["nearest_neighbour_accuracy"] <= 1.0
+    for clip in result["clips"]:
+        assert sum(s["length"] for s in clip["model_stretches"][0]) == clip["wrong"][0]
