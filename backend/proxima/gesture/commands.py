@@ -145,6 +145,7 @@ def protocols(
     threads: int = 2,
     time_warp: Annotated[float | None, typer.Option(help="As for train.")] = None,
     transitions: Annotated[float, typer.Option(help="As for train.")] = 0.0,
+    mirror: Annotated[bool, typer.Option(help="As for train.")] = False,
 ) -> None:
     """Train and score a model on each evaluation protocol; print the results table."""
     from rich.progress import Progress
@@ -160,7 +161,7 @@ def protocols(
 
     splits = split or [*LASER_PROTOCOLS, *UAV_PROTOCOLS]
     cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads,
-                      transitions=transitions)  # fmt: skip
+                      transitions=transitions, mirror=mirror)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     rows_so_far: list[dict] = []
