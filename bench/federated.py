@@ -77,7 +77,7 @@ def centralised(checkpoint: Path | None, test_stride: int) -> dict[str, Any]:
     out: dict[str, Any] = {"load_average_at_start": load()}
     if checkpoint is None:
         tmp = Path(tempfile.mkdtemp()) / "central.pt"
-        cfg = TrainConfig(threads=1)
+        cfg = TrainConfig(threads=1, mirror=False)  # as the drones train (task.py)
         t0 = time.perf_counter()
         res = train_model(None, "tcn", "temporal", tmp, cfg, command="bench.federated")
         out.update(train_seconds=round(time.perf_counter() - t0, 1), epochs=len(res.history),

@@ -33,8 +33,9 @@ class ControlSettings(BaseModel):
     The paper averages three recognitions and waits 10 s between commands (10.4 s
     response); the defaults keep its three-recognition filter and were chosen by the
     latency benchmark on held-out data: the fastest setting with fewer than one wrong
-    command per hour (median onset -> command 2.0 s, 0.67 wrong per hour; see
-    docs/recognition.md for the figures and what they miss).
+    command per hour (median onset -> command 2.0 s; 0.67 wrong per hour with the model
+    they were tuned on, 0 with the current recipe's; see docs/recognition.md for the
+    figures and what they miss).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")

@@ -46,7 +46,7 @@ def train(
     seed: int = 0,
     threads: Annotated[int, typer.Option(help="Torch threads.")] = 2,
     yaw: Annotated[float, typer.Option(help="Extra yaw augmentation, degrees.")] = 30.0,
-    mirror: Annotated[bool, typer.Option(help="Left-right mirroring augmentation.")] = False,
+    mirror: Annotated[bool, typer.Option(help="Left-right mirroring augmentation.")] = True,
     time_warp: Annotated[
         float | None,
         typer.Option(help="Time-warp augmentation: +- change of speed; 0 = off. [default: 0.2]"),
@@ -145,7 +145,7 @@ def protocols(
     threads: int = 2,
     time_warp: Annotated[float | None, typer.Option(help="As for train.")] = None,
     transitions: Annotated[float, typer.Option(help="As for train.")] = 0.0,
-    mirror: Annotated[bool, typer.Option(help="As for train.")] = False,
+    mirror: Annotated[bool, typer.Option(help="As for train.")] = True,
 ) -> None:
     """Train and score a model on each evaluation protocol; print the results table."""
     from rich.progress import Progress

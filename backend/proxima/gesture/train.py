@@ -41,7 +41,9 @@ class TrainConfig:
     yaw_deg: float = 30.0  # extra yaw for windows with depth
     time_warp: float = 0.2  # +- change of speed (0.8x to 1.2x); 0 = off
     transitions: float = 0.0  # share of windows turned into a gesture onset; 0 = off
-    mirror: bool = False  # off: on the temporal split it cost 2 points (0.925 -> 0.903)
+    # On: unseen side views 0.34 / 0.50 -> 0.55 / 0.76 (the other side view, mirrored,
+    # looks like the unseen one); the temporal split stays within its seed-to-seed spread.
+    mirror: bool = True
     label_smoothing: float = 0.05
     threads: int = 2
     extra: dict = field(default_factory=dict)
