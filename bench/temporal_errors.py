@@ -30,7 +30,6 @@ import numpy as np
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CHUNK = 10  # frames averaged into one coarse pose
-POSITIONS = 34  # the body pipeline's first features: 17 joints x (x, y)
 
 
 def stretches(pred: np.ndarray, truth: np.ndarray, labels: Sequence[str]) -> list[dict]:
@@ -47,11 +46,18 @@ def stretches(pred: np.ndarray, truth: np.ndarray, labels: Sequence[str]) -> lis
     return out
 
 
-def coarse(features: np.ndarray) -> np.ndarray:
-    """(N, W, F) body features -> (N, W // CHUNK * 34) mean joint positions per chunk."""
-    n, w = features.shape[:2]
-    pos = features[:, : w - w % CHUNK, :POSITIONS]
-    return pos.reshape(n, w // CHUNK, CHUNK, POSITIONS).mean(axis=2).reshape(n, -1)
+def coarse(windows: Any) -> np.ndarray:
+    """Windows -> (N, W // CHUNK * 17 * 2): the shared joints' 2D positions in the body
+    pipeline's canonical frame (hip-centred, torso-scaled, facing the camera), averaged
+    over each CHUNK frames."""
+    from proxima.gesture.features import BodyPipeline
+    from proxima.gesture.geometry import to_metric
+    from proxima.gesture.skeleton import COMMON
+
+    can = BodyPipeline().canonical(to_metric(windows.xyz, windows.aspect), windows.has_z)
+    n, w = can.shape[:2]
+    pos = can[:, : w - w % CHUNK, list(COMMON), :2].reshape(n, w // CHUNK, CHUNK, -1)
+    return pos.mean(axis=2).reshape(n, -1)
 
 
 def nearest_labels(train: np.ndarray, train_labels: np.ndarray, test: np.ndarray) -> np.ndarray:
@@ -68,7 +74,6 @@ def nearest_labels(train: np.ndarray, train_labels: np.ndarray, test: np.ndarray
 def analyse(checkpoints: Sequence[Path], data: str | None) -> dict[str, Any]:
     from proxima.gesture.classifier import GestureClassifier
     from proxima.gesture.datasets import load_data
-    from proxima.gesture.features import make_pipeline
     from proxima.gesture.train import features, predict_proba
     from proxima.gesture.windows import WINDOW, make_windows, split_clips
 
@@ -77,8 +82,7 @@ def analyse(checkpoints: Sequence[Path], data: str | None) -> dict[str, Any]:
     names: list[str] = []
     test = make_windows(parts.test, WINDOW, 3, 5, names)
     train = make_windows(parts.train, WINDOW, 2, 5, names)
-    body = make_pipeline("body")  # the check's poses, whatever the models' own input
-    nn = nearest_labels(coarse(features(body, train)), train.labels, coarse(features(body, test)))
+    nn = nearest_labels(coarse(train), train.labels, coarse(test))
     truth = test.labels
     models, preds = [], []
     for path in checkpoints:
