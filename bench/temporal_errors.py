@@ -7,10 +7,10 @@ for each window, and a model-free check, the label of the nearest training windo
 pipeline's joint positions, hip-centred, torso-scaled and turned to face the camera,
 averaged over six 10-frame chunks). Where the model is wrong and the nearest training
 window carries the same wrong label, that test stretch looks more like another gesture's
-training data than like its own: a bigger or better-trained model has nothing to learn
-it from; more recordings do. With several checkpoints (e.g. seeds of one recipe), the
-windows every model gets wrong are counted too: if they alone exceed what a target
-allows, no choice among these models reaches it.
+training data than like its own: a better-trained model of the same recordings cannot
+be expected to get it right; more recordings can. With several checkpoints (e.g. seeds
+of one recipe), the windows every model gets wrong are counted too: if they alone exceed
+what a target allows, no choice among these models reaches it.
 
     python -m bench.temporal_errors --checkpoint A.pt [--checkpoint B.pt ...]
 
@@ -24,9 +24,12 @@ import argparse
 import json
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from proxima.gesture.windows import Windows
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CHUNK = 10  # frames averaged into one coarse pose
@@ -46,7 +49,7 @@ def stretches(pred: np.ndarray, truth: np.ndarray, labels: Sequence[str]) -> lis
     return out
 
 
-def coarse(windows: Any) -> np.ndarray:
+def coarse(windows: Windows) -> np.ndarray:
     """Windows -> (N, W // CHUNK * 17 * 2): the shared joints' 2D positions in the body
     pipeline's canonical frame (hip-centred, torso-scaled, facing the camera), averaged
     over each CHUNK frames."""
