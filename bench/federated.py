@@ -71,13 +71,14 @@ def load() -> float:
 
 
 def centralised(checkpoint: Path | None, test_stride: int) -> dict[str, Any]:
+    from proxima.federated.task import LOCAL_MIRROR
     from proxima.gesture.train import TrainConfig
     from proxima.gesture.workflow import evaluate_checkpoint, train_model
 
     out: dict[str, Any] = {"load_average_at_start": load()}
     if checkpoint is None:
         tmp = Path(tempfile.mkdtemp()) / "central.pt"
-        cfg = TrainConfig(threads=1, mirror=False)  # as the drones train (task.py)
+        cfg = TrainConfig(threads=1, mirror=LOCAL_MIRROR)  # augment as the drones do
         t0 = time.perf_counter()
         res = train_model(None, "tcn", "temporal", tmp, cfg, command="bench.federated")
         out.update(train_seconds=round(time.perf_counter() - t0, 1), epochs=len(res.history),

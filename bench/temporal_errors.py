@@ -79,6 +79,7 @@ def analyse(checkpoints: Sequence[Path], data: str | None) -> dict[str, Any]:
     from proxima.gesture.datasets import load_data
     from proxima.gesture.train import features, predict_proba
     from proxima.gesture.windows import WINDOW, make_windows, split_clips
+    from proxima.types import GESTURES
 
     laser = load_data([data or "laser"])
     parts = split_clips(laser.clips, "temporal", WINDOW, laser.uav_dir)
@@ -86,12 +87,15 @@ def analyse(checkpoints: Sequence[Path], data: str | None) -> dict[str, Any]:
     test = make_windows(parts.test, WINDOW, 3, 5, names)
     train = make_windows(parts.train, WINDOW, 2, 5, names)
     nn = nearest_labels(coarse(train), train.labels, coarse(test))
-    truth = test.labels
+    truth = test.labels  # indices into GESTURES
+    labels = list(GESTURES)
     models, preds = [], []
     for path in checkpoints:
         clf = GestureClassifier.load(path)
         if clf.window != WINDOW:
             raise ValueError(f"{path}: window {clf.window}, the temporal split uses {WINDOW}")
+        if list(clf.labels) != labels:
+            raise ValueError(f"{path}: labels {list(clf.labels)} are not {labels}")
         pred = predict_proba(clf.model, features(clf.pipeline, test)).argmax(axis=1)
         wrong = pred != truth
         preds.append(pred)
@@ -105,7 +109,6 @@ def analyse(checkpoints: Sequence[Path], data: str | None) -> dict[str, Any]:
                 "wrong_and_nearest_neighbour_agrees": int((wrong & (nn == pred)).sum()),
             }
         )
-    labels = list(clf.labels)
     every = np.all([p != truth for p in preds], axis=0)
     clips = []
     for c in np.unique(test.clip):

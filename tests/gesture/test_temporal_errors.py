@@ -5,8 +5,10 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
+import torch
 
-from bench.temporal_errors import main, nearest_labels, stretches
+from bench.temporal_errors import analyse, main, nearest_labels, stretches
 from proxima.gesture.workflow import evaluate_checkpoint
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
@@ -48,3 +50,12 @@ def test_analysis_agrees_with_evaluate(small_checkpoint: Path, laser_dir: Path, 
     assert 0.5 < result["nearest_neighbour_accuracy"] <= 1.0
     for clip in result["clips"]:
         assert sum(s["length"] for s in clip["model_stretches"][0]) == clip["wrong"][0]
+
+
+def test_a_checkpoint_with_other_labels_is_refused(small_checkpoint: Path, laser_dir, tmp_path):
+    blob = torch.load(small_checkpoint, weights_only=False)
+    blob["labels"] = list(reversed(blob["labels"]))
+    other = tmp_path / "other-labels.pt"
+    torch.save(blob, other)
+    with pytest.raises(ValueError, match=r"other-labels\.pt: labels"):
+        analyse([other], str(laser_dir))
