@@ -123,7 +123,11 @@ def simulate(
     single stream never changes who drives)."""
     t = (stream.frames - 1) / stream.fps
     filt = MovingAverageFilter(
-        labels, control.filter_size, control.threshold, control.filter_reset_s
+        labels,
+        control.filter_size,
+        control.threshold,
+        control.filter_reset_s,
+        control.threshold_by_command,
     )
     ctl = CommandController(["main"], "main", control)
     run = Run()
@@ -308,6 +312,48 @@ def plot(latencies: list[float], path: Path, title: str) -> None:
     plt.close(fig)
 
 
+def plot_gestures(per_view_gesture: dict[str, dict[str, dict]], path: Path) -> None:
+    """Median onset -> command latency per gesture (rows) and view (columns), each cell
+    annotated with its median and the share of its commands later than 2.5 s."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    views = list(per_view_gesture)
+    gestures = sorted({g for v in views for g in per_view_gesture[v]})
+    med = np.full((len(gestures), len(views)), np.nan)
+    for j, v in enumerate(views):
+        for i, g in enumerate(gestures):
+            cell = per_view_gesture[v].get(g)
+            if cell and cell["median_s"] is not None:
+                med[i, j] = cell["median_s"]
+    fig, ax = plt.subplots(figsize=(4.6, 6))
+    im = ax.imshow(med, cmap="RdYlGn_r", vmin=1.0, vmax=5.0, aspect="auto")
+    for i, g in enumerate(gestures):
+        for j, v in enumerate(views):
+            cell = per_view_gesture[v].get(g)
+            if not cell or cell["median_s"] is None:
+                ax.text(j, i, "none", ha="center", va="center", fontsize=7)
+                continue
+            late = 1 - cell["within_2_5_s"]
+            ax.text(
+                j,
+                i,
+                f"{cell['median_s']:.1f} s\n{late:.0%} late",
+                ha="center",
+                va="center",
+                fontsize=7,
+            )
+    ax.set_xticks(range(len(views)), [f"view {v}" for v in views])
+    ax.set_yticks(range(len(gestures)), gestures)
+    ax.set_title("median onset -> command; share later than 2.5 s", fontsize=9)
+    fig.colorbar(im, ax=ax, label="median latency (s)", shrink=0.6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument(
@@ -454,6 +500,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         result=summary,
         utility=round(utility(summary), 4),
         per_view={v: _brief(s.summary()) for v, s in per_view.items()},
+        per_view_gesture={v: s.summary()["latency_by_gesture"] for v, s in per_view.items()},
         wrong_examples=total.wrong_examples,
         offline_check={
             "same_as_engine": _brief(ours_offline) == _brief(summary),
@@ -473,6 +520,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.out.with_suffix(".png"),
         f"{summary['stream_hours']:.1f} h of held-out replay, {len(total.latencies)} commands",
     )
+    plot_gestures(result["per_view_gesture"], args.out.with_name(args.out.stem + "-gestures.png"))
     log(f"result {summary}")
     log(f"wrote {args.out}")
     return 0

@@ -25,7 +25,7 @@ from pydantic_settings import (
     SettingsConfigDict,
 )
 
-from proxima.control.config import ConfirmByCommand
+from proxima.control.config import ConfirmByCommand, ThresholdByCommand
 
 URI_SCHEMES = ("webcam:", "file:", "rtsp://", "rtsps://", "replay:")
 
@@ -132,6 +132,9 @@ class RecognitionSettings(_Section):
     confirm: int | None = Field(None, ge=1, description="decisions in a row before a command")
     confirm_by_command: ConfirmByCommand | None = Field(
         None, description="decisions a command needs in a row, e.g. {land = 9}: safer landings"
+    )
+    threshold_by_command: ThresholdByCommand | None = Field(
+        None, description="threshold per command, e.g. {wave_off = 0.7}: an easier abort"
     )
     operator_lost_hover_s: float = Field(5.0, gt=0, description="hover after this long")
 

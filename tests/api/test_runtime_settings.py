@@ -24,6 +24,16 @@ def test_recognition_overrides_reach_control_settings() -> None:
         Settings.model_validate({"recognition": {"confirm_by_command": {"land": "x"}}})
 
 
+def test_per_command_thresholds_reach_control_settings_and_are_checked() -> None:
+    assert ControlSettings().threshold_by_command == {"wave_off": 0.7}
+    s = Settings.model_validate({"recognition": {"threshold_by_command": {"wave_off": 0.6}}})
+    assert control_settings(s).threshold_by_command == {"wave_off": 0.6}
+    with pytest.raises(ValidationError, match="unknown gesture wavoff"):
+        ControlSettings(threshold_by_command={"wavoff": 0.7})
+    with pytest.raises(ValidationError, match="less than or equal to 1"):
+        Settings.model_validate({"recognition": {"threshold_by_command": {"wave_off": 1.5}}})
+
+
 def test_a_misspelt_gesture_in_confirm_by_command_is_refused(tmp_path: Path) -> None:
     # Silently ignoring `lnad` would leave land on the shorter default agreement.
     path = tmp_path / "console.toml"

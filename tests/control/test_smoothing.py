@@ -55,3 +55,15 @@ def test_wrong_length_is_rejected() -> None:
     f = MovingAverageFilter(GESTURES)
     with pytest.raises(ValueError, match="expected 13 probabilities"):
         f.update(0.0, np.ones(12) / 12)
+
+
+def test_a_command_with_its_own_threshold_passes_on_less_evidence() -> None:
+    # wave_off (the abort) at 0.7; everything else still needs 0.9.
+    f = MovingAverageFilter(GESTURES, size=3, threshold=0.9, thresholds={"wave_off": 0.7})
+    for i in range(3):
+        out = f.update(i * 0.2, onehot("wave_off", 0.75))
+    assert out.action == "wave_off"
+    g = MovingAverageFilter(GESTURES, size=3, threshold=0.9, thresholds={"wave_off": 0.7})
+    for i in range(3):
+        out = g.update(i * 0.2, onehot("land", 0.75))
+    assert out.action == ""

@@ -38,6 +38,7 @@ def control_settings(settings: Settings) -> Any:
         "handover_hold_s": "hold_s",
         "confirm": "confirm",
         "confirm_by_command": "confirm_by_command",
+        "threshold_by_command": "threshold_by_command",
     }
     overrides = {
         theirs: getattr(r, ours) for ours, theirs in names.items() if getattr(r, ours) is not None

@@ -13,7 +13,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 from proxima.types import GESTURES
 
 
-def _known_gestures(counts: dict[str, int]) -> dict[str, int]:
+def _known_gestures(counts: dict) -> dict:
     # A misspelt key would otherwise leave that command on the shorter default agreement.
     unknown = sorted(set(counts) - set(GESTURES))
     if unknown:
@@ -24,6 +24,10 @@ def _known_gestures(counts: dict[str, int]) -> dict[str, int]:
 # Per-gesture count of agreeing decisions; keys are gesture names, counts at least 1.
 ConfirmByCommand = Annotated[
     dict[str, Annotated[int, Field(ge=1)]], AfterValidator(_known_gestures)
+]
+# Per-gesture averaged probability an action needs, in place of `threshold`.
+ThresholdByCommand = Annotated[
+    dict[str, Annotated[float, Field(gt=0.0, le=1.0)]], AfterValidator(_known_gestures)
 ]
 
 
@@ -43,6 +47,11 @@ class ControlSettings(BaseModel):
     filter_size: int = Field(3, ge=1, description="recognitions in the moving average")
     threshold: float = Field(
         0.9, ge=0.0, le=1.0, description="averaged probability an action needs"
+    )
+    threshold_by_command: ThresholdByCommand = Field(
+        default_factory=lambda: {"wave_off": 0.7},
+        description="per-command `threshold`, e.g. {'wave_off': 0.7}: the abort (hover and "
+        "disarm) is safe to give on less evidence, and missing it is not",
     )
     confirm: int = Field(
         2, ge=1, description="consecutive filtered decisions that must agree before a command"

@@ -8,7 +8,7 @@ and asking for a minimum averaged confidence suppresses those blips.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +26,8 @@ class FilteredAction:
 
 
 class MovingAverageFilter:
-    """Average of the last `size` probability vectors; an action passes at `threshold`.
+    """Average of the last `size` probability vectors; an action passes at `threshold`,
+    or at its own entry in `thresholds` (label -> threshold).
 
     The filter empties itself when recognitions pause for `reset_after_s` stream seconds
     (the operator left the view, the window restarted), so stale recognitions never mix
@@ -39,12 +40,14 @@ class MovingAverageFilter:
         size: int = 3,
         threshold: float = 0.8,
         reset_after_s: float = 1.0,
+        thresholds: Mapping[str, float] | None = None,
     ) -> None:
         if size < 1:
             raise ValueError(f"filter size must be >= 1, got {size}")
         self.labels = tuple(labels)
         self.size = size
         self.threshold = threshold
+        self.thresholds = dict(thresholds or {})
         self.reset_after_s = reset_after_s
         self._history: deque[np.ndarray] = deque(maxlen=size)
         self._last_t: float | None = None
@@ -71,5 +74,6 @@ class MovingAverageFilter:
         best = int(np.argmax(mean))
         confidence = float(mean[best])
         full = len(self._history) == self.size
-        action = self.labels[best] if full and confidence >= self.threshold else ""
+        needed = self.thresholds.get(self.labels[best], self.threshold)
+        action = self.labels[best] if full and confidence >= needed else ""
         return FilteredAction(t=t, action=action, confidence=confidence, probs=mean)

@@ -47,9 +47,14 @@ class Score:
     wrong: int = 0
     safety: int = 0
     latencies: list[float] = field(default_factory=list)
+    latency_by_gesture: dict[str, list[float]] = field(default_factory=dict)
     wrong_examples: list[dict[str, Any]] = field(default_factory=list)
     missed_by_gesture: dict[str, int] = field(default_factory=dict)
     wrong_by_pair: dict[str, int] = field(default_factory=dict)
+
+    def add_latency(self, gesture: str, seconds: float) -> None:
+        self.latencies.append(seconds)
+        self.latency_by_gesture.setdefault(gesture, []).append(seconds)
 
     def merge(self, other: Score) -> Score:
         self.seconds += other.seconds
@@ -62,6 +67,8 @@ class Score:
         self.wrong += other.wrong
         self.safety += other.safety
         self.latencies.extend(other.latencies)
+        for g, lat in other.latency_by_gesture.items():
+            self.latency_by_gesture.setdefault(g, []).extend(lat)
         self.wrong_examples.extend(other.wrong_examples)
         for src, dst in (
             (other.missed_by_gesture, self.missed_by_gesture),
@@ -105,8 +112,24 @@ class Score:
             "wrong_or_spurious_per_hour": per_hour(self.wrong + self.repeats),
             "safety_hovers": self.safety,
             "missed_by_gesture": dict(sorted(self.missed_by_gesture.items())),
+            "latency_by_gesture": {
+                g: latency_figures(lat) for g, lat in sorted(self.latency_by_gesture.items())
+            },
             "wrong_by_pair": dict(sorted(self.wrong_by_pair.items(), key=lambda kv: -kv[1])),
         }
+
+
+def latency_figures(latencies: Sequence[float]) -> dict[str, Any]:
+    """Count, median, p95 and share within 2.5 s of some onset -> command latencies."""
+    lat = np.asarray(latencies, dtype=float)
+    if not lat.size:
+        return {"commands": 0, "median_s": None, "p95_s": None, "within_2_5_s": None}
+    return {
+        "commands": int(lat.size),
+        "median_s": round(float(np.median(lat)), 3),
+        "p95_s": round(float(np.percentile(lat, 95)), 3),
+        "within_2_5_s": round(float((lat <= 2.5).mean()), 4),
+    }
 
 
 def expected_commands(
@@ -169,11 +192,11 @@ def score_commands(
             else:
                 hit[i] = True
                 score.hits += 1
-                score.latencies.append(t - onsets[i])
+                score.add_latency(name, t - onsets[i])
         elif i > 0 and name == expected[i - 1] and not hit[i - 1]:
             hit[i - 1] = True
             score.late += 1
-            score.latencies.append(t - onsets[i - 1])
+            score.add_latency(name, t - onsets[i - 1])
         else:
             score.wrong += 1
             key = f"{segments[i]['gesture']}->{name}"

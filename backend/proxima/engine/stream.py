@@ -76,7 +76,11 @@ class StreamPipeline:
         self.publish = publish
         self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
         self.filter = MovingAverageFilter(
-            classifier.labels, control.filter_size, control.threshold, control.filter_reset_s
+            classifier.labels,
+            control.filter_size,
+            control.threshold,
+            control.filter_reset_s,
+            control.threshold_by_command,
         )
         self.frames = 0
         self.classifications = 0
