@@ -82,6 +82,8 @@ def stance_stream(arm: StitchedStream, clip: Clip, rows: int) -> tuple[StitchedS
 
 
 def run(checkpoint: Path, data: str | None) -> dict[str, Any]:
+    """Every still stance of the LASER clips, played after arming through the engine
+    with `checkpoint` and the default settings; the JSON-ready result."""
     from proxima.gesture.classifier import GestureClassifier
     from proxima.gesture.data_source import resolve_dataset
     from proxima.gesture.laser import load_laser_dir

@@ -14,7 +14,7 @@ from proxima.types import GESTURES
 
 
 def _known_gestures(counts: dict) -> dict:
-    # A misspelt key would otherwise leave that command on the shorter default agreement.
+    # A misspelt key would otherwise leave that command on the general setting.
     unknown = sorted(set(counts) - set(GESTURES))
     if unknown:
         raise ValueError(f"unknown gesture {', '.join(unknown)}; known: {', '.join(GESTURES)}")
