@@ -35,7 +35,7 @@ import numpy as np
 from bench.command_latency import engine_run
 from proxima.control import ControlSettings
 from proxima.engine.config import EngineSettings
-from proxima.engine.stitch import StitchedStream, stitch_views
+from proxima.engine.stitch import StitchedStream, smoothstep, stitch_views
 from proxima.gesture.clip import Clip
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -64,11 +64,12 @@ def back_and_forth(n: int, frames: int) -> np.ndarray:
 
 
 def stance_stream(arm: StitchedStream, clip: Clip, rows: int) -> tuple[StitchedStream, float]:
-    """`arm`, then a 0.5 s linear move to the clip's first pose, then its first `rows`
-    rows back and forth for STILL_S; returns the stream and the stance's start time."""
+    """`arm`, then a 0.5 s move to the clip's first pose (eased as the stitched streams'
+    transitions are), then its first `rows` rows back and forth for STILL_S; returns the
+    stream and the stance's start time."""
     move = round(0.5 * FPS)
     idx = back_and_forth(rows, round(STILL_S * FPS))
-    frac = (np.arange(1, move + 1) / (move + 1))[:, None, None]
+    frac = smoothstep(np.arange(1, move + 1) / (move + 1))[:, None, None]
     a, b = arm.xyz[-1], clip.xyz[0]
     xyz = np.concatenate([arm.xyz, a + frac * (b - a), clip.xyz[idx]]).astype(np.float32)
     vis_move = np.repeat(np.minimum(arm.visibility[-1], clip.visibility[0])[None], move, 0)
@@ -81,15 +82,12 @@ def stance_stream(arm: StitchedStream, clip: Clip, rows: int) -> tuple[StitchedS
     return stream, (first + move - 1) / FPS
 
 
-def run(checkpoint: Path, data: str | None) -> dict[str, Any]:
-    """Every still stance of the LASER clips, played after arming through the engine
+def run(checkpoint: Path, clips: Sequence[Clip]) -> dict[str, Any]:
+    """Every still stance of the LASER `clips`, played after arming through the engine
     with `checkpoint` and the default settings; the JSON-ready result."""
     from proxima.gesture.classifier import GestureClassifier
-    from proxima.gesture.data_source import resolve_dataset
-    from proxima.gesture.laser import load_laser_dir
 
     clf = GestureClassifier.load(checkpoint)
-    clips = load_laser_dir(resolve_dataset(data))
     control, settings = ControlSettings(), EngineSettings()
     stances = []
     with tempfile.TemporaryDirectory(prefix="proxima-still-") as tmp:
@@ -172,14 +170,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     from proxima.gesture.laser import load_laser_dir
 
     started = time.perf_counter()
-    result = run(args.checkpoint, args.data)
+    clips = load_laser_dir(resolve_dataset(args.data))
+    result = run(args.checkpoint, clips)
     result["command"] = "python -m bench.still_operator " + shlex.join(argv or sys.argv[1:])
     result["date"] = time.strftime("%Y-%m-%d")
     result["seconds"] = round(time.perf_counter() - started, 1)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n")
-    clips = {c.name: c for c in load_laser_dir(resolve_dataset(args.data))}
-    plot(result, clips, args.out.with_suffix(".png"))
+    plot(result, {c.name: c for c in clips}, args.out.with_suffix(".png"))
     for s in result["stances"]:
         said = ", ".join(f"{c['command']} at {c['t_after_start_s']} s" for c in s["commands"])
         print(f"{s['clip']:28s} armed={s['armed_at_start']!s:5s} {said or 'no command'}")

@@ -31,14 +31,19 @@ def test_still_prefix_ends_where_the_arms_start_to_move() -> None:
 
 
 @pytest.fixture(scope="module")
-def stances() -> dict[str, dict]:
-    result = run(SHIPPED, None)
+def clips() -> list:
+    return load_laser_dir(resolve_dataset(None))
+
+
+@pytest.fixture(scope="module")
+def stances(clips) -> dict[str, dict]:
+    result = run(SHIPPED, clips)
     return {s["clip"]: s for s in result["stances"]}
 
 
-def test_the_dataset_has_still_stances_in_every_view(stances) -> None:
-    clips = {c.name: c for c in load_laser_dir(resolve_dataset(None))}
-    assert {clips[name].view for name in stances} == {"f", "l", "r"}
+def test_the_dataset_has_still_stances_in_every_view(clips, stances) -> None:
+    view = {c.name: c.view for c in clips}
+    assert {view[name] for name in stances} == {"f", "l", "r"}
     assert all(s["armed_at_start"] for s in stances.values())
 
 

@@ -165,7 +165,9 @@ def random_plan(
     return plan
 
 
-def _smoothstep(x: np.ndarray) -> np.ndarray:
+def smoothstep(x: np.ndarray) -> np.ndarray:
+    """Ease 0..1 into 0..1 with zero speed at both ends, so a joined pose starts and
+    stops moving gently instead of jerking (a jerk is a motion no operator makes)."""
     return x * x * (3.0 - 2.0 * x)
 
 
@@ -224,7 +226,7 @@ def stitch_views(
             transition_t = (next_frame - 1) / fps
             if k > 0 and n_trans > 0:
                 a_xyz, a_vis = xyz_l[-1][-1], vis_l[-1][-1]
-                alpha = _smoothstep(np.arange(1, n_trans + 1) / (n_trans + 1))[:, None, None]
+                alpha = smoothstep(np.arange(1, n_trans + 1) / (n_trans + 1))[:, None, None]
                 xyz_l.append(((1 - alpha) * a_xyz + alpha * xyz[0]).astype(np.float32))
                 vis_l.append(
                     ((1 - alpha[..., 0]) * a_vis + alpha[..., 0] * vis[0]).astype(np.float32)
