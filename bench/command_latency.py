@@ -41,13 +41,14 @@ from proxima.control import (
     StreamUpdate,
 )
 from proxima.engine.config import EngineSettings, StreamSpec
-from proxima.engine.scoring import Score, score_commands
+from proxima.engine.scoring import Score, latency_figures, score_commands
 from proxima.engine.stitch import StitchedStream, random_plan, stitch_views
 from proxima.events import ArmingEvent, CommandEvent, EventBus
 from proxima.pose import operator_sight
 from proxima.types import Pose
 
 VIEWS = ("f", "l", "r")
+STAGES = ("named", "passed", "commanded")  # see onset_stages
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
@@ -142,6 +143,78 @@ def simulate(
         for e in ctl.process(StreamUpdate("main", float(t[i]), Sight(sight[i]), action)):
             run.add(e)
     return run
+
+
+def onset_stages(
+    stream: StitchedStream,
+    k: np.ndarray,
+    probs: np.ndarray,
+    stride: int,
+    control: ControlSettings,
+    labels: Sequence[str],
+    commands: Sequence[dict],
+    size: int = 60,
+) -> list[dict[str, Any]]:
+    """Where the time from onset to command goes, per gesture performed: seconds from
+    its onset until the classifier names it in `filter_size` recognitions running
+    (`named_s`), until the moving-average filter passes it (`passed_s`: its averaged
+    probability reached its threshold) and until its command (`commanded_s`, from
+    `commands`); None when that did not happen before the next gesture began."""
+    t = (stream.frames - 1) / stream.fps
+    filt = MovingAverageFilter(
+        labels,
+        control.filter_size,
+        control.threshold,
+        control.filter_reset_s,
+        control.threshold_by_command,
+    )
+    # (t, the classifier's top label, recognitions running with that top label, what the
+    # filter passed); runs restart with the window, as the filter does
+    recognitions: list[tuple[float, str, int, str]] = []
+    for i in np.flatnonzero((k >= size) & ((k - size) % stride == 0)):
+        top = labels[int(np.argmax(probs[i]))]
+        running = 1
+        if k[i] == size:
+            filt.reset()
+        elif recognitions and recognitions[-1][1] == top:
+            running = recognitions[-1][2] + 1
+        passed = filt.update(float(t[i]), probs[i]).action
+        recognitions.append((float(t[i]), top, running, passed))
+    rows = []
+    segments = stream.segments
+    for n, seg in enumerate(segments):
+        onset = seg.onset_t
+        end = segments[n + 1].onset_t if n + 1 < len(segments) else stream.duration_s
+        mine = [r for r in recognitions if onset <= r[0] < end]
+        named = next(
+            (when - onset for when, top, run, _ in mine
+             if top == seg.gesture and run >= control.filter_size),
+            None,
+        )  # fmt: skip
+        passed = next((when - onset for when, _, _, a in mine if a == seg.gesture), None)
+        mine_cmd = [c["t"] for c in commands if c["command"] == seg.gesture]
+        commanded = next((when - onset for when in mine_cmd if onset <= when < end), None)
+        rows.append(
+            {"view": stream.view, "gesture": seg.gesture, "named_s": named, "passed_s": passed,
+             "commanded_s": commanded}
+        )  # fmt: skip
+    return rows
+
+
+def stage_figures(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Latency figures of each stage over the gestures that were commanded (so the three
+    stages describe the same gestures), and how many gestures never reached a stage."""
+    done = [r for r in rows if r["commanded_s"] is not None]
+    return {
+        "gestures": len(rows),
+        "with_command": len(done),
+        "never_named": sum(r["named_s"] is None for r in rows),
+        "never_passed": sum(r["passed_s"] is None for r in rows),
+        **{
+            stage: latency_figures([r[f"{stage}_s"] for r in done if r[f"{stage}_s"] is not None])
+            for stage in STAGES
+        },
+    }
 
 
 class Run:
@@ -354,6 +427,34 @@ def plot_gestures(per_view_gesture: dict[str, dict[str, dict]], path: Path) -> N
     plt.close(fig)
 
 
+def plot_stages(rows: Sequence[dict[str, Any]], path: Path) -> None:
+    """Per view, the share of the commanded gestures that reached each stage (named,
+    passed, commanded) by each time after the onset."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(VIEWS), figsize=(10, 3.2), sharey=True)
+    for ax, view in zip(axes, VIEWS, strict=True):
+        done = [r for r in rows if r["view"] == view and r["commanded_s"] is not None]
+        for stage, colour in zip(STAGES, ("#4477aa", "#ccbb44", "#ee6677"), strict=True):
+            x = np.sort([r[f"{stage}_s"] for r in done if r[f"{stage}_s"] is not None])
+            ax.step(x, np.arange(1, len(x) + 1) / max(len(done), 1), where="post",
+                    color=colour, label=stage)  # fmt: skip
+        ax.axvline(2.5, color="grey", ls="--", lw=1)
+        ax.axhline(0.95, color="grey", ls=":", lw=1)
+        ax.set_xlim(0, 6)
+        ax.set_title(f"view {view} ({len(done)} commands)", fontsize=9)
+        ax.set_xlabel("seconds after the onset")
+    axes[0].set_ylabel("share of commanded gestures")
+    axes[0].legend(fontsize=8, loc="lower right")
+    fig.suptitle("where the time goes: classifier names it, filter passes it, command", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument(
@@ -483,6 +584,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             ),
             "note": "the tuning grid's setting with the fewest wrong commands (offline replay)",
         }
+    stages = []
+    for stream, (k, probs, sight) in zip(streams, cache, strict=True):
+        run = simulate(stream, k, probs, sight, settings.stride, control, clf.labels)
+        stages += onset_stages(stream, k, probs, settings.stride, control, clf.labels, run.commands)
     summary = total.summary()
     result.update(
         streams={
@@ -501,6 +606,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         utility=round(utility(summary), 4),
         per_view={v: _brief(s.summary()) for v, s in per_view.items()},
         per_view_gesture={v: s.summary()["latency_by_gesture"] for v, s in per_view.items()},
+        stages={
+            "method": "offline replay; named: the classifier's top label in filter_size "
+            "recognitions running; passed: the moving-average filter passes it; "
+            "commanded: its command. Figures over the gestures that were commanded",
+            "all": stage_figures(stages),
+            **{v: stage_figures([r for r in stages if r["view"] == v]) for v in VIEWS},
+        },
         wrong_examples=total.wrong_examples,
         offline_check={
             "same_as_engine": _brief(ours_offline) == _brief(summary),
@@ -521,6 +633,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"{summary['stream_hours']:.1f} h of held-out replay, {len(total.latencies)} commands",
     )
     plot_gestures(result["per_view_gesture"], args.out.with_name(args.out.stem + "-gestures.png"))
+    plot_stages(stages, args.out.with_name(args.out.stem + "-stages.png"))
     log(f"result {summary}")
     log(f"wrote {args.out}")
     return 0

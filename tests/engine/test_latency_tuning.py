@@ -3,7 +3,17 @@ the selection rule puts correct commands first, then fast ones."""
 
 from pathlib import Path
 
-from bench.command_latency import build_streams, rank, tune
+import pytest
+
+from bench.command_latency import (
+    build_streams,
+    cached_probs,
+    onset_stages,
+    rank,
+    simulate,
+    stage_figures,
+    tune,
+)
 from proxima.control import ControlSettings
 from proxima.gesture.classifier import GestureClassifier
 
@@ -27,3 +37,29 @@ def test_tuning_picks_the_fastest_setting_under_one_wrong_command_per_hour(laser
     fast_wrong = {"wrong_or_spurious_per_hour": 5.0, "on_time_rate": 1.0, "utility": 0.9}
     slow_right = {"wrong_or_spurious_per_hour": 0.0, "on_time_rate": 0.1, "utility": 0.1}
     assert rank(slow_right) > rank(fast_wrong)
+
+
+def test_the_stages_of_a_command_come_in_order_and_end_at_the_scored_latency(
+    laser_clips,
+) -> None:
+    clf = GestureClassifier.load(SHIPPED)
+    (stream,) = build_streams(laser_clips, [3], 12, "test", 3.0, 4.0)
+    control = ControlSettings()
+    k, probs, sight = cached_probs(clf, stream, [5], 0.25)
+    run = simulate(stream, k, probs, sight, 5, control, clf.labels)
+    rows = onset_stages(stream, k, probs, 5, control, clf.labels, run.commands)
+    assert [r["gesture"] for r in rows] == [s.gesture for s in stream.segments]
+    done = [r for r in rows if r["commanded_s"] is not None]
+    assert done, "the shipped model commands some of a held-out stream"
+    for r in done:
+        assert r["passed_s"] is not None and r["passed_s"] <= r["commanded_s"]
+        if r["gesture"] not in control.threshold_by_command:
+            # Three probabilities averaging 0.9 are each 0.7 or more, so on top: the
+            # classifier has named the gesture three times running by then.
+            assert r["named_s"] is not None and r["named_s"] <= r["passed_s"]
+    # The commanded stage is the scorer's latency of the same commands.
+    score = run.score(stream)
+    assert sorted(r["commanded_s"] for r in done) == pytest.approx(sorted(score.latencies))
+    figures = stage_figures(rows)
+    assert figures["with_command"] == len(done) and figures["gestures"] == len(rows)
+    assert figures["named"]["median_s"] <= figures["commanded"]["median_s"]
