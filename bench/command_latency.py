@@ -119,9 +119,15 @@ def simulate(
     labels: Sequence[str],
     size: int = 60,
 ) -> Run:
-    """What the controller decides when fed frame 0 and the classification frames of
-    `stride` (the engine decides on those; its other frames only carry sight, which in a
-    single stream never changes who drives)."""
+    """What the controller decides when fed the frames that can change a decision: the
+    classification frames of `stride`, the first and last frame, the frames on either
+    side of every change of sight and of every gap, and every frame without the operator. The engine
+    feeds it every frame; the ones left out carry no action and the sight of the frames
+    around them, so they could only refresh when the operator was last seen, which the
+    last frame before each change already does. A run of frames without the operator
+    thus ends in the operator-lost hover at the frame where the engine sends it. Only
+    the idle disarm can come up to `stride` - 1 frames later than in the engine. The
+    stream's end is reported last, as the engine does."""
     t = (stream.frames - 1) / stream.fps
     filt = MovingAverageFilter(
         labels,
@@ -132,9 +138,16 @@ def simulate(
     )
     ctl = CommandController(["main"], "main", control)
     run = Run()
-    due = np.flatnonzero((k >= size) & ((k - size) % stride == 0)).tolist()
-    feed = [(0, False)] if not due or due[0] != 0 else []
-    for i, classify in feed + [(i, True) for i in due]:
+    classify_at = (k >= size) & ((k - size) % stride == 0)
+    # a change of sight, or a gap in the frames (nobody found, or a dropped stretch)
+    changes = (sight[1:] != sight[:-1]) | (np.diff(t) > 1.5 / stream.fps)
+    sight_only = np.zeros(len(t), dtype=bool)
+    sight_only[[0, -1]] = True
+    sight_only[1:] |= changes  # the first frame of a new sight
+    sight_only[:-1] |= changes  # the last of the old one: when the operator was last seen
+    sight_only |= sight == Sight.NONE
+    for i in np.flatnonzero(classify_at | sight_only):
+        classify = bool(classify_at[i])
         action = None
         if classify:
             if k[i] == size:  # a new window stretch: the engine's filter restarts too
@@ -142,6 +155,9 @@ def simulate(
             action = filt.update(float(t[i]), probs[i]).action
         for e in ctl.process(StreamUpdate("main", float(t[i]), Sight(sight[i]), action)):
             run.add(e)
+    # The end of the replay, as the engine reports it: an armed drone gets the safety hover.
+    for e in ctl.process(StreamUpdate("main", float(t[-1]), Sight.NONE, ended=True)):
+        run.add(e)
     return run
 
 

@@ -63,3 +63,36 @@ def test_the_stages_of_a_command_come_in_order_and_end_at_the_scored_latency(
     figures = stage_figures(rows)
     assert figures["with_command"] == len(done) and figures["gestures"] == len(rows)
     assert figures["named"]["median_s"] <= figures["commanded"]["median_s"]
+
+
+def test_the_offline_replay_decides_as_the_engine_when_the_operator_is_lost(
+    laser_clips, tmp_path: Path
+) -> None:
+    """The tuning's offline replay against the real engine on one stream where the
+    operator is unseen for 1.5 s (every landmark invisible) and then gone for 2 s (no
+    frames at all): the same commands (the operator-lost hovers included) and the same
+    arming changes."""
+    from bench.command_latency import engine_run
+    from proxima.engine.config import EngineSettings
+    from proxima.engine.stitch import Blank, apply_blank
+
+    clf = GestureClassifier.load(SHIPPED)
+    (stream,) = build_streams(laser_clips, [5], 10, "test", 3.0, 4.0)
+    t = (stream.frames - 1) / stream.fps
+    stream.visibility[(t >= 12.0) & (t < 13.5)] = 0.0
+    apply_blank(stream, Blank(24.0, 26.0, "drop"))
+    control = ControlSettings()
+    k, probs, sight = cached_probs(clf, stream, [5], 0.25)
+    offline = simulate(stream, k, probs, sight, 5, control, clf.labels)
+    path = tmp_path / "stream.csv"
+    stream.write(path)
+    engine = engine_run(path, control, EngineSettings(), clf)
+
+    def rounded(commands: list[dict]) -> list[tuple]:
+        return [(round(c["t"], 3), c["command"], c["stream"]) for c in commands]
+
+    assert rounded(offline.commands) == rounded(engine.commands)
+    assert [(round(t, 3), a) for t, a in offline.arming] == [
+        (round(t, 3), a) for t, a in engine.arming
+    ]
+    assert sum(c["stream"] == "" for c in engine.commands) >= 2  # the losses hovered

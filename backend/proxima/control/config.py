@@ -61,7 +61,7 @@ class ControlSettings(BaseModel):
         description="per-command `confirm`, e.g. {'land': 9}: a command that ends the "
         "flight may ask for a longer agreement than the others",
     )
-    debounce_s: float = Field(3.0, ge=0.0, description="least time between two commands")
+    debounce_s: float = Field(2.0, ge=0.0, description="least time between two commands")
     release_s: float = Field(
         4.0,
         ge=0.0,
