@@ -121,13 +121,13 @@ def simulate(
 ) -> Run:
     """What the controller decides when fed the frames that can change a decision: the
     classification frames of `stride`, the first and last frame, the frames on either
-    side of every change of sight and of every gap, and every frame without the operator. The engine
-    feeds it every frame; the ones left out carry no action and the sight of the frames
-    around them, so they could only refresh when the operator was last seen, which the
-    last frame before each change already does. A run of frames without the operator
-    thus ends in the operator-lost hover at the frame where the engine sends it. Only
-    the idle disarm can come up to `stride` - 1 frames later than in the engine. The
-    stream's end is reported last, as the engine does."""
+    side of every change of sight and of every gap, and every frame without the
+    operator. The engine feeds it every frame; the ones left out carry no action and
+    the sight of the frames around them, so they could only refresh when the operator
+    was last seen, which the last frame before each change already does. A run of
+    frames without the operator thus ends in the operator-lost hover at the frame where
+    the engine sends it. Only the idle disarm can come up to `stride` - 1 frames later
+    than in the engine. The stream's end is reported last, as the engine does."""
     t = (stream.frames - 1) / stream.fps
     filt = MovingAverageFilter(
         labels,
