@@ -129,13 +129,7 @@ def simulate(
     the engine sends it. Only the idle disarm can come up to `stride` - 1 frames later
     than in the engine. The stream's end is reported last, as the engine does."""
     t = (stream.frames - 1) / stream.fps
-    filt = MovingAverageFilter(
-        labels,
-        control.filter_size,
-        control.threshold,
-        control.filter_reset_s,
-        control.threshold_by_command,
-    )
+    filt = MovingAverageFilter.from_settings(control, labels)
     ctl = CommandController(["main"], "main", control)
     run = Run()
     classify_at = (k >= size) & ((k - size) % stride == 0)
@@ -177,13 +171,7 @@ def onset_stages(
     probability reached its threshold) and until its command (`commanded_s`, from
     `commands`); None when that did not happen before the next gesture began."""
     t = (stream.frames - 1) / stream.fps
-    filt = MovingAverageFilter(
-        labels,
-        control.filter_size,
-        control.threshold,
-        control.filter_reset_s,
-        control.threshold_by_command,
-    )
+    filt = MovingAverageFilter.from_settings(control, labels)
     # (t, the classifier's top label, recognitions running with that top label, what the
     # filter passed); runs restart with the window, as the filter does
     recognitions: list[tuple[float, str, int, str]] = []

@@ -10,8 +10,12 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from proxima.control.config import ControlSettings
 
 
 @dataclass(frozen=True)
@@ -51,6 +55,17 @@ class MovingAverageFilter:
         self.reset_after_s = reset_after_s
         self._history: deque[np.ndarray] = deque(maxlen=size)
         self._last_t: float | None = None
+
+    @classmethod
+    def from_settings(cls, control: ControlSettings, labels: Sequence[str]) -> MovingAverageFilter:
+        """The filter `control` describes (size, thresholds, reset) over `labels`."""
+        return cls(
+            labels,
+            control.filter_size,
+            control.threshold,
+            control.filter_reset_s,
+            control.threshold_by_command,
+        )
 
     def reset(self) -> None:
         """Forget every recognition."""

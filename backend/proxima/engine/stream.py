@@ -75,13 +75,7 @@ class StreamPipeline:
         self.classifier = classifier
         self.publish = publish
         self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
-        self.filter = MovingAverageFilter(
-            classifier.labels,
-            control.filter_size,
-            control.threshold,
-            control.filter_reset_s,
-            control.threshold_by_command,
-        )
+        self.filter = MovingAverageFilter.from_settings(control, classifier.labels)
         self.frames = 0
         self.classifications = 0
         self._pose_stage: ImagePoseStage | None = None
