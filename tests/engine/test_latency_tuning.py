@@ -1,5 +1,6 @@
-"""The latency benchmark's tuning (bench/command_latency.py) on a real stitched stream:
-the selection rule puts correct commands first, then fast ones."""
+"""The latency benchmark (bench/command_latency.py) on real stitched streams: the tuning's
+selection rule puts correct commands first, then fast ones; its offline replay decides as
+the engine does; the stages from onset to command come in order."""
 
 from pathlib import Path
 
@@ -8,6 +9,7 @@ import pytest
 from bench.command_latency import (
     build_streams,
     cached_probs,
+    engine_run,
     onset_stages,
     rank,
     simulate,
@@ -15,6 +17,8 @@ from bench.command_latency import (
     tune,
 )
 from proxima.control import ControlSettings
+from proxima.engine.config import EngineSettings
+from proxima.engine.stitch import Blank, apply_blank
 from proxima.gesture.classifier import GestureClassifier
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
@@ -72,10 +76,6 @@ def test_the_offline_replay_decides_as_the_engine_when_the_operator_is_lost(
     operator is unseen for 1.5 s (every landmark invisible) and then gone for 2 s (no
     frames at all): the same commands (the operator-lost hovers included) and the same
     arming changes."""
-    from bench.command_latency import engine_run
-    from proxima.engine.config import EngineSettings
-    from proxima.engine.stitch import Blank, apply_blank
-
     clf = GestureClassifier.load(SHIPPED)
     (stream,) = build_streams(laser_clips, [5], 10, "test", 3.0, 4.0)
     t = (stream.frames - 1) / stream.fps
