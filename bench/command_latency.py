@@ -147,6 +147,8 @@ def simulate(
             if k[i] == size:  # a new window stretch: the engine's filter restarts too
                 filt.reset()
             action = filt.update(float(t[i]), probs[i]).action
+            top = labels[int(np.argmax(probs[i]))]
+            run.recognitions.append((float(t[i]), top, action, bool(k[i] == size)))
         for e in ctl.process(StreamUpdate("main", float(t[i]), Sight(sight[i]), action)):
             run.add(e)
     # The end of the replay, as the engine reports it: an armed drone gets the safety hover.
@@ -155,35 +157,20 @@ def simulate(
     return run
 
 
-def onset_stages(
-    stream: StitchedStream,
-    k: np.ndarray,
-    probs: np.ndarray,
-    stride: int,
-    control: ControlSettings,
-    labels: Sequence[str],
-    commands: Sequence[dict],
-    size: int = 60,
-) -> list[dict[str, Any]]:
-    """Where the time from onset to command goes, per gesture performed: seconds from
-    its onset until the classifier names it in `filter_size` recognitions running
-    (`named_s`), until the moving-average filter passes it (`passed_s`: its averaged
-    probability reached its threshold) and until its command (`commanded_s`, from
-    `commands`); None when that did not happen before the next gesture began."""
-    t = (stream.frames - 1) / stream.fps
-    filt = MovingAverageFilter.from_settings(control, labels)
-    # (t, the classifier's top label, recognitions running with that top label, what the
-    # filter passed); runs restart with the window, as the filter does
+def onset_stages(stream: StitchedStream, run: Run, filter_size: int) -> list[dict[str, Any]]:
+    """Where the time from onset to command goes, per gesture performed in `stream`, from
+    `simulate`'s `run`: seconds from its onset until the classifier names it in
+    `filter_size` recognitions running (`named_s`), until the moving-average filter
+    passes it (`passed_s`: its averaged probability reached its threshold) and until its
+    command (`commanded_s`); None when that did not happen before the next gesture began."""
+    # (t, top label, recognitions running with that top label, what the filter passed);
+    # runs restart with the window, as the filter does
     recognitions: list[tuple[float, str, int, str]] = []
-    for i in np.flatnonzero((k >= size) & ((k - size) % stride == 0)):
-        top = labels[int(np.argmax(probs[i]))]
+    for when, top, passed, new_window in run.recognitions:
         running = 1
-        if k[i] == size:
-            filt.reset()
-        elif recognitions and recognitions[-1][1] == top:
+        if not new_window and recognitions and recognitions[-1][1] == top:
             running = recognitions[-1][2] + 1
-        passed = filt.update(float(t[i]), probs[i]).action
-        recognitions.append((float(t[i]), top, running, passed))
+        recognitions.append((when, top, running, passed))
     rows = []
     segments = stream.segments
     for n, seg in enumerate(segments):
@@ -191,12 +178,12 @@ def onset_stages(
         end = segments[n + 1].onset_t if n + 1 < len(segments) else stream.duration_s
         mine = [r for r in recognitions if onset <= r[0] < end]
         named = next(
-            (when - onset for when, top, run, _ in mine
-             if top == seg.gesture and run >= control.filter_size),
+            (when - onset for when, top, count, _ in mine
+             if top == seg.gesture and count >= filter_size),
             None,
         )  # fmt: skip
         passed = next((when - onset for when, _, _, a in mine if a == seg.gesture), None)
-        mine_cmd = [c["t"] for c in commands if c["command"] == seg.gesture]
+        mine_cmd = [c["t"] for c in run.commands if c["command"] == seg.gesture]
         commanded = next((when - onset for when in mine_cmd if onset <= when < end), None)
         rows.append(
             {"view": stream.view, "gesture": seg.gesture, "named_s": named, "passed_s": passed,
@@ -228,6 +215,9 @@ class Run:
         self.commands: list[dict] = []
         self.arming: list[tuple[float, bool]] = []
         self.events = 0
+        # offline replays only: (t, the classifier's top label, what the filter passed,
+        # whether a new window stretch began)
+        self.recognitions: list[tuple[float, str, str, bool]] = []
 
     def add(self, e: Any) -> None:
         self.events += 1
@@ -570,7 +560,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     strides = sorted({settings.stride, *([cautious["stride"]] if cautious else [])})
     cache = [cached_probs(clf, s, strides, settings.max_gap_s) for s in streams]
     paper_summary = evaluate_config(streams, cache, settings.stride, paper, clf.labels)
-    ours_offline = evaluate_config(streams, cache, settings.stride, control, clf.labels)
+    ours, stages = Score(), []
+    for stream, (k, probs, sight) in zip(streams, cache, strict=True):
+        run = simulate(stream, k, probs, sight, settings.stride, control, clf.labels)
+        ours.merge(run.score(stream))
+        stages += onset_stages(stream, run, control.filter_size)
+    ours_offline = ours.summary()
     if cautious:
         # The tuning grid's setting with the fewest wrong commands, on the evaluation
         # streams: what avoiding wrong commands costs in latency.
@@ -588,10 +583,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             ),
             "note": "the tuning grid's setting with the fewest wrong commands (offline replay)",
         }
-    stages = []
-    for stream, (k, probs, sight) in zip(streams, cache, strict=True):
-        run = simulate(stream, k, probs, sight, settings.stride, control, clf.labels)
-        stages += onset_stages(stream, k, probs, settings.stride, control, clf.labels, run.commands)
     summary = total.summary()
     result.update(
         streams={

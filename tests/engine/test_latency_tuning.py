@@ -51,7 +51,7 @@ def test_the_stages_of_a_command_come_in_order_and_end_at_the_scored_latency(
     control = ControlSettings()
     k, probs, sight = cached_probs(clf, stream, [5], 0.25)
     run = simulate(stream, k, probs, sight, 5, control, clf.labels)
-    rows = onset_stages(stream, k, probs, 5, control, clf.labels, run.commands)
+    rows = onset_stages(stream, run, control.filter_size)
     assert [r["gesture"] for r in rows] == [s.gesture for s in stream.segments]
     done = [r for r in rows if r["commanded_s"] is not None]
     assert done, "the shipped model commands some of a held-out stream"
