@@ -33,7 +33,6 @@ from pathlib import Path
 from typing import Any
 
 OUT = Path(__file__).parent / "results" / "federated.json"
-CURVE = Path(__file__).parent / "results" / "federated_curve.png"
 
 
 class PeakMemory:
@@ -70,15 +69,14 @@ def load() -> float:
     return round(os.getloadavg()[0], 2)
 
 
-def centralised(checkpoint: Path | None, test_stride: int) -> dict[str, Any]:
-    from proxima.federated.task import LOCAL_MIRROR
+def centralised(checkpoint: Path | None, test_stride: int, mirror: bool) -> dict[str, Any]:
     from proxima.gesture.train import TrainConfig
     from proxima.gesture.workflow import evaluate_checkpoint, train_model
 
     out: dict[str, Any] = {"load_average_at_start": load()}
     if checkpoint is None:
         tmp = Path(tempfile.mkdtemp()) / "central.pt"
-        cfg = TrainConfig(threads=1, mirror=LOCAL_MIRROR)  # augment as the drones do
+        cfg = TrainConfig(threads=1, mirror=mirror)  # augment as the drones do
         t0 = time.perf_counter()
         res = train_model(None, "tcn", "temporal", tmp, cfg, command="bench.federated")
         out.update(train_seconds=round(time.perf_counter() - t0, 1), epochs=len(res.history),
@@ -148,6 +146,10 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--long-rounds", type=int, default=20, help="0 to skip")
     ap.add_argument("--skip-deploy", action="store_true")
+    ap.add_argument("--mirror", action=argparse.BooleanOptionalAction, default=None,
+                    help="mirroring augmentation on the drones and the centralised run "
+                    "(default: FLConfig's)")  # fmt: skip
+    ap.add_argument("--out", type=Path, default=OUT, help="results JSON; the curve beside it")
     args = ap.parse_args()
 
     import torch
@@ -156,12 +158,16 @@ def main() -> None:
 
     torch.set_num_threads(1)
     base = FLConfig(rounds=args.rounds, include_samples=False)
+    if args.mirror is not None:
+        base = replace(base, mirror=args.mirror)
     results: dict[str, Any] = {
         "machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
                     "torch": torch.__version__, "flwr": _flwr_version()},
         "partition": "view: one LASER camera view per drone (f, l, r)",
+        "mirror": base.mirror,
     }  # fmt: skip
-    results["centralised"] = central = centralised(args.central_checkpoint, base.test_stride)
+    central = centralised(args.central_checkpoint, base.test_stride, base.mirror)
+    results["centralised"] = central
     print("centralised", central["accuracy"], flush=True)
     sim, _ = simulation(base, f"{args.rounds} rounds x 3 drones")
     results["simulation_5_rounds"] = sim
@@ -179,7 +185,8 @@ def main() -> None:
         results["simulation_long"] = long
         from proxima.federated.curve import plot_curve
 
-        plot_curve(res.rounds, CURVE, f"FedAvg, one view per drone, {args.long_rounds} rounds",
+        curve = args.out.with_name(args.out.stem + "_curve.png")
+        plot_curve(res.rounds, curve, f"FedAvg, one view per drone, {args.long_rounds} rounds",
                    reference=central["accuracy"])  # fmt: skip
         print("long", long["wall_s"], long["best_accuracy"], reached[:1], flush=True)
     results["targets"] = {
@@ -200,9 +207,9 @@ def main() -> None:
     for k in ("simulation_5_rounds", "simulation_long"):
         if k in results:
             results[k].pop("rounds", None)
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(json.dumps(results, indent=1))
-    print(f"-> {OUT}")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(results, indent=1))
+    print(f"-> {args.out}")
 
 
 def _flwr_version() -> str:

@@ -6,13 +6,14 @@ import tomllib
 
 import numpy as np
 import pytest
+import torch
 from fl_helpers import fast_config
 from flwr.app import Array, ArrayRecord, MetricRecord, RecordDict
 
 from proxima.federated.config import APP_DIR, ConfigError, FLConfig
 from proxima.federated.data import drone_data, partition_windows, sample_clips
 from proxima.federated.strategy import check_update
-from proxima.federated.task import new_model
+from proxima.federated.task import new_model, train_local
 
 
 def test_flower_app_defaults_match_the_config() -> None:
@@ -34,6 +35,22 @@ def test_bad_run_config_names_the_key() -> None:
         FLConfig(pipeline="paper")  # MinMax statistics would be per drone
     cfg = FLConfig.from_run_config({"rounds": 7, "include-samples": "false", "strategy": "fedprox"})
     assert (cfg.rounds, cfg.include_samples, cfg.strategy) == (7, False, "fedprox")
+
+
+def test_the_mirror_key_turns_mirroring_on_in_the_drones_local_training(laser_clips) -> None:
+    assert FLConfig.from_run_config({"mirror": "true"}).mirror
+    assert not FLConfig().mirror  # measured without benefit (docs/federated.md)
+    fit_w, val_w = partition_windows(fast_config(stride=24), 1, laser_clips)
+
+    def weights(mirror: bool) -> list[torch.Tensor]:
+        cfg = fast_config(stride=24, mirror=mirror)
+        model, pipeline = new_model(cfg)
+        train_local(model, pipeline, fit_w, val_w, cfg, server_round=1, partition_id=1)
+        return [p.detach().clone() for p in model.parameters()]
+
+    plain, again, mirrored = weights(False), weights(False), weights(True)
+    assert all(torch.equal(a, b) for a, b in zip(plain, again, strict=True))  # seeded
+    assert not all(torch.equal(a, b) for a, b in zip(plain, mirrored, strict=True))
 
 
 def test_view_partition_gives_each_drone_one_camera_view(laser_clips) -> None:

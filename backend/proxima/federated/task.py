@@ -21,11 +21,6 @@ from proxima.gesture.models import build_model
 from proxima.gesture.train import TrainConfig, evaluate_loss, features, fit
 from proxima.gesture.windows import Windows
 
-# Drones train without the mirroring that centralised training applies by default: the
-# federated figures (docs/federated.md) were measured so, and with one camera view per
-# drone mirroring may well help, but that is not measured yet.
-LOCAL_MIRROR = False
-
 
 def new_model(cfg: FLConfig) -> tuple[nn.Module, Pipeline]:
     """A freshly initialised model (seeded, so every party starts identical) and the
@@ -109,7 +104,7 @@ def train_local(
         stride=cfg.stride,
         max_gap=cfg.max_gap,
         threads=cfg.threads,
-        mirror=LOCAL_MIRROR,
+        mirror=cfg.mirror,
     )
     mu = cfg.proximal_mu if cfg.strategy == "fedprox" else 0.0
     history = fit(
