@@ -51,7 +51,7 @@ class FLConfig:
     test_stride: int = 3  # frames between held-out test windows
     max_gap: int = 5
     patience: int = 12  # local early stopping (epochs without a better validation loss)
-    mirror: bool = False  # left-right mirroring augmentation on the drones (see task.py)
+    mirror: bool = False  # mirroring on the drones; no gain measured (docs/federated.md)
     seed: int = 0
     threads: int = 1  # torch threads per client
     round_timeout_s: float = 600.0  # a drone that has not answered by then is dropped
