@@ -390,28 +390,16 @@ def plot_gestures(per_view_gesture: dict[str, dict[str, dict]], path: Path) -> N
     views = list(per_view_gesture)
     gestures = sorted({g for v in views for g in per_view_gesture[v]})
     med = np.full((len(gestures), len(views)), np.nan)
-    for j, v in enumerate(views):
-        for i, g in enumerate(gestures):
-            cell = per_view_gesture[v].get(g)
-            if cell and cell["median_s"] is not None:
-                med[i, j] = cell["median_s"]
     fig, ax = plt.subplots(figsize=(4.6, 6))
-    im = ax.imshow(med, cmap="RdYlGn_r", vmin=1.0, vmax=5.0, aspect="auto")
     for i, g in enumerate(gestures):
         for j, v in enumerate(views):
             cell = per_view_gesture[v].get(g)
-            if not cell or cell["median_s"] is None:
-                ax.text(j, i, "none", ha="center", va="center", fontsize=7)
-                continue
-            late = 1 - cell["within_2_5_s"]
-            ax.text(
-                j,
-                i,
-                f"{cell['median_s']:.1f} s\n{late:.0%} late",
-                ha="center",
-                va="center",
-                fontsize=7,
-            )
+            text = "none"
+            if cell and cell["median_s"] is not None:
+                med[i, j] = cell["median_s"]
+                text = f"{cell['median_s']:.1f} s\n{1 - cell['within_2_5_s']:.0%} late"
+            ax.text(j, i, text, ha="center", va="center", fontsize=7)
+    im = ax.imshow(med, cmap="RdYlGn_r", vmin=1.0, vmax=5.0, aspect="auto")
     ax.set_xticks(range(len(views)), [f"view {v}" for v in views])
     ax.set_yticks(range(len(gestures)), gestures)
     ax.set_title("median onset -> command; share later than 2.5 s", fontsize=9)

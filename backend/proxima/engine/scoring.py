@@ -89,9 +89,7 @@ class Score:
         def ratio(n: int) -> float | None:
             return round(n / self.expected, 4) if self.expected else None
 
-        def pct(q: float) -> float | None:
-            return round(float(np.percentile(lat, q)), 3) if lat.size else None
-
+        figures = latency_figures(self.latencies)
         return {
             "stream_hours": round(hours, 4),
             "expected_commands": self.expected,
@@ -101,10 +99,10 @@ class Score:
             "blocked_while_disarmed": self.blocked,
             "hit_rate": ratio(self.hits + self.late),
             "on_time_rate": ratio(int((lat <= 2.5).sum())),
-            "latency_median_s": pct(50),
-            "latency_p95_s": pct(95),
+            "latency_median_s": figures["median_s"],
+            "latency_p95_s": figures["p95_s"],
             "latency_max_s": round(float(lat.max()), 3) if lat.size else None,
-            "within_2_5_s": round(float((lat <= 2.5).mean()), 4) if lat.size else None,
+            "within_2_5_s": figures["within_2_5_s"],
             "wrong": self.wrong,
             "repeats": self.repeats,
             "wrong_per_hour": per_hour(self.wrong),
@@ -113,7 +111,7 @@ class Score:
             "safety_hovers": self.safety,
             "missed_by_gesture": dict(sorted(self.missed_by_gesture.items())),
             "latency_by_gesture": {
-                g: latency_figures(lat) for g, lat in sorted(self.latency_by_gesture.items())
+                g: latency_figures(gl) for g, gl in sorted(self.latency_by_gesture.items())
             },
             "wrong_by_pair": dict(sorted(self.wrong_by_pair.items(), key=lambda kv: -kv[1])),
         }
