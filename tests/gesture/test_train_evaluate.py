@@ -12,7 +12,7 @@ from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.features import PaperPipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import build_model
-from proxima.gesture.train import TrainConfig, fit
+from proxima.gesture.train import EpochLog, TrainConfig, chosen_schedule, fit, fit_schedule
 from proxima.gesture.windows import make_windows, split_clips
 from proxima.types import GESTURES
 
@@ -22,6 +22,7 @@ def test_checkpoint_is_one_self_contained_small_file(small_checkpoint, laser_cli
     clf = GestureClassifier.load(small_checkpoint)
     assert clf.labels == GESTURES and clf.window == 60 and clf.model_name == "tcn"
     assert clf.metadata["split"] == "temporal" and len(clf.metadata["data_sha256"]) == 64
+    assert clf.metadata["refit_epochs"] == 0  # the refit is off by default
     w = make_windows([laser_clips[0]], stride=100)
     probs = clf.predict(w.xyz, w.vis)
     assert probs.shape == (len(w), 13)
@@ -73,3 +74,49 @@ def test_a_checkpoint_from_another_pipeline_version_is_refused(small_checkpoint,
     with pytest.raises(ValueError, match="not a Proxima gesture checkpoint"):
         torch.save({"weights": 1}, tmp_path / "other.pt")
         GestureClassifier.load(tmp_path / "other.pt")
+
+
+def _logs(val_losses: list[float], lrs_after: list[float]) -> list[EpochLog]:
+    return [EpochLog(i + 1, 1.0, v, 0.5, lr, 0.1)
+            for i, (v, lr) in enumerate(zip(val_losses, lrs_after, strict=True))]  # fmt: skip
+
+
+def test_the_chosen_schedule_ends_at_the_epoch_early_stopping_kept() -> None:
+    # each log holds the rate after its epoch, so epoch e ran at the rate logged at e - 1
+    logs = _logs([1.0, 0.9, 0.95, 0.94, 0.8, 0.85], [2e-3, 2e-3, 2e-3, 1e-3, 1e-3, 5e-4])
+    assert chosen_schedule(logs, 2e-3) == [2e-3, 2e-3, 2e-3, 2e-3, 1e-3]
+    # a fall of less than fit's MIN_DELTA is not better: epoch 2 stays the best
+    logs = _logs([1.0, 0.8, 0.79995, 0.9], [2e-3, 2e-3, 1e-3, 1e-3])
+    assert chosen_schedule(logs, 2e-3) == [2e-3, 2e-3]
+
+
+def test_the_refit_trains_a_fresh_model_at_the_replayed_rates(laser_clips) -> None:
+    """`fit_schedule` runs one epoch per rate, at that rate, and learns from data."""
+    parts = split_clips([c for c in laser_clips if c.view == "f"], "temporal")
+    w = make_windows(parts.train, stride=12)
+    pipe = PaperPipeline().fit(to_metric(w.xyz, w.aspect))
+    cfg = TrainConfig(epochs=3, threads=1, mirror=False)
+    torch.manual_seed(0)
+    model = build_model("tcn", num_features=pipe.num_features)
+    lrs = [5e-3, 5e-3, 2.5e-3, 2.5e-3]
+    history = fit_schedule(model, pipe, w, cfg, lrs)
+    assert [h.lr for h in history] == lrs and [h.epoch for h in history] == [1, 2, 3, 4]
+    assert all(np.isnan(h.val_loss) for h in history)
+    assert history[-1].train_loss < history[0].train_loss
+
+
+def test_train_with_refit_saves_the_model_trained_on_the_whole_training_part(
+    laser_dir, tmp_path
+) -> None:
+    out = tmp_path / "refit.pt"
+    result = CliRunner().invoke(
+        app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
+              "--epochs", "3", "--stride", "12", "--threads", "1", "--refit"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "refit: a fresh model on the whole training part" in result.output
+    meta = GestureClassifier.load(out).metadata
+    assert 1 <= meta["refit_epochs"] <= meta["epochs_run"] == 3
+    # the whole part holds the validation tails and the gaps before them too
+    assert meta["refit_windows"] > meta["train_windows"] + meta["val_windows"]
+    assert meta["train_config"]["refit"] is True

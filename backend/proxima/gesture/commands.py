@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import shlex
 import sys
 from pathlib import Path
@@ -54,6 +55,13 @@ def train(
     transitions: Annotated[
         float, typer.Option(help="Share of windows turned into gesture onsets (e.g. 0.3).")
     ] = 0.0,
+    refit: Annotated[
+        bool,
+        typer.Option(
+            help="After early stopping, retrain on the whole training part "
+            "(validation tails included) for the chosen epochs."
+        ),
+    ] = False,
 ) -> None:
     """Train a gesture model on a split's training part and save one self-contained file."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -64,7 +72,7 @@ def train(
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
                       seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
-                      transitions=transitions)  # fmt: skip
+                      transitions=transitions, refit=refit)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     command = "proxima " + shlex.join(sys.argv[1:])
@@ -81,13 +89,21 @@ def train(
             )
 
         def on_epoch(log) -> None:  # type: ignore[no-untyped-def]
-            progress.update(task, completed=log.epoch, description=(
-                f"loss {log.train_loss:.3f} val {log.val_loss:.3f} acc {log.val_accuracy:.3f}"
-            ))  # fmt: skip
+            text = f"loss {log.train_loss:.3f}"
+            if not math.isnan(log.val_loss):  # the refit has no validation
+                text += f" val {log.val_loss:.3f} acc {log.val_accuracy:.3f}"
+            progress.update(task, completed=log.epoch, description=text)
+
+        def on_refit(n_windows: int, n_epochs: int) -> None:
+            progress.console.print(
+                f"refit: a fresh model on the whole training part ({n_windows} windows) "
+                f"for the {n_epochs} epochs early stopping chose"
+            )
+            progress.reset(task, total=n_epochs, description="refit")
 
         try:
             result = train_model(
-                data, model, split, out, cfg, pipeline, command, on_epoch, on_start
+                data, model, split, out, cfg, pipeline, command, on_epoch, on_start, on_refit
             )
         except (DataError, ValueError) as exc:
             _fail(exc)
@@ -95,7 +111,9 @@ def train(
     typer.echo(
         f"saved {result.checkpoint} ({result.checkpoint.stat().st_size / 1024:.0f} KiB): "
         f"{len(result.history)} epochs, best val loss {best.val_loss:.3f} "
-        f"(acc {best.val_accuracy:.3f}) at epoch {best.epoch}, {result.seconds:.0f} s"
+        f"(acc {best.val_accuracy:.3f}) at epoch {best.epoch}"
+        + (f", refit {len(result.refit_history)} epochs" if result.refit_history else "")
+        + f", {result.seconds:.0f} s"
     )
 
 
@@ -146,6 +164,7 @@ def protocols(
     time_warp: Annotated[float | None, typer.Option(help="As for train.")] = None,
     transitions: Annotated[float, typer.Option(help="As for train.")] = 0.0,
     mirror: Annotated[bool, typer.Option(help="As for train.")] = True,
+    refit: Annotated[bool, typer.Option(help="As for train.")] = False,
 ) -> None:
     """Train and score a model on each evaluation protocol; print the results table."""
     from rich.progress import Progress
@@ -161,7 +180,7 @@ def protocols(
 
     splits = split or [*LASER_PROTOCOLS, *UAV_PROTOCOLS]
     cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads,
-                      transitions=transitions, mirror=mirror)  # fmt: skip
+                      transitions=transitions, mirror=mirror, refit=refit)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     rows_so_far: list[dict] = []

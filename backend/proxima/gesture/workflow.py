@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import torch
 
 from proxima.gesture.classifier import GestureClassifier, save_checkpoint
 from proxima.gesture.datasets import LoadedData, load_data
@@ -15,7 +17,15 @@ from proxima.gesture.evaluate import metrics
 from proxima.gesture.features import make_pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
-from proxima.gesture.train import EpochLog, TrainConfig, features, fit, predict_proba
+from proxima.gesture.train import (
+    EpochLog,
+    TrainConfig,
+    chosen_schedule,
+    features,
+    fit,
+    fit_schedule,
+    predict_proba,
+)
 from proxima.gesture.windows import WINDOW, Windows, make_windows, split_clips, validation_parts
 
 
@@ -27,20 +37,33 @@ class TrainResult:
     val_windows: int
     skipped_windows: int
     seconds: float
+    # the refit on the whole training part (empty when off or without validation)
+    refit_history: list[EpochLog] = field(default_factory=list)
+    refit_windows: int = 0
+
+
+@dataclass
+class SplitWindows:
+    fit: Windows  # the training part less each clip's validation tail and the gap before it
+    val: Windows  # the validation tails (early stopping)
+    whole: Windows  # the whole training part (the refit)
+    test: Windows  # empty for `all`
 
 
 def split_windows(
     data: LoadedData, split: str, stride: int, max_gap: int, test_stride: int | None = None
-) -> tuple[Windows, Windows, Windows]:
-    """(fit, validation, test) windows for a split; validation is the tail of each
-    training part, test is empty for `all`."""
+) -> SplitWindows:
+    """A split's windows: fit and validation come from its training part (validation is
+    the tail of each clip's part), test from its test part."""
     parts = split_clips(data.clips, split, WINDOW, data.uav_dir)
     fit_parts, val_parts = validation_parts(parts.train, WINDOW)
     names: list[str] = []
-    fit_w = make_windows(fit_parts, WINDOW, stride, max_gap, names)
-    val_w = make_windows(val_parts, WINDOW, stride, max_gap, names)
-    test_w = make_windows(parts.test, WINDOW, test_stride or stride, max_gap, names)
-    return fit_w, val_w, test_w
+    return SplitWindows(
+        fit=make_windows(fit_parts, WINDOW, stride, max_gap, names),
+        val=make_windows(val_parts, WINDOW, stride, max_gap, names),
+        whole=make_windows(parts.train, WINDOW, stride, max_gap, names),
+        test=make_windows(parts.test, WINDOW, test_stride or stride, max_gap, names),
+    )
 
 
 def train_model(
@@ -53,17 +76,32 @@ def train_model(
     command: str = "",
     on_epoch: Callable[[EpochLog], None] | None = None,
     on_start: Callable[[int, int, int], None] | None = None,
+    on_refit: Callable[[int, int], None] | None = None,
 ) -> TrainResult:
-    """Train a model on a split's training part and save a self-contained checkpoint."""
+    """Train a model on a split's training part and save a self-contained checkpoint.
+
+    Early stopping chooses the epochs on the validation tails; with `cfg.refit` a fresh
+    model then trains on the whole training part for those epochs, at the learning
+    rates the first run used, and is the one saved. `on_refit(windows, epochs)` is
+    called when the refit starts; `on_epoch` is called for both runs' epochs."""
     t0 = time.perf_counter()
     data = load_data(data_specs)
-    fit_w, val_w, _ = split_windows(data, split, cfg.stride, cfg.max_gap)
+    w = split_windows(data, split, cfg.stride, cfg.max_gap)
+    fit_w, val_w = w.fit, w.val
     if on_start:
         on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
     pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
     pipeline.fit(to_metric(fit_w.xyz, fit_w.aspect))
     model = build_model(model_name, num_features=pipeline.num_features)
     history = fit(model, pipeline, fit_w, val_w, cfg, on_epoch)
+    refit_history: list[EpochLog] = []
+    if cfg.refit and len(val_w):
+        lrs = chosen_schedule(history, cfg.lr)
+        if on_refit:
+            on_refit(len(w.whole), len(lrs))
+        torch.manual_seed(cfg.seed)
+        model = build_model(model_name, num_features=pipeline.num_features)
+        refit_history = fit_schedule(model, pipeline, w.whole, cfg, lrs, on_epoch)
     meta = {
         "command": command,
         "split": split,
@@ -73,10 +111,13 @@ def train_model(
         "epochs_run": len(history),
         "train_windows": len(fit_w),
         "val_windows": len(val_w),
+        "refit_epochs": len(refit_history),
+        "refit_windows": len(w.whole) if refit_history else 0,
     }
     path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta)
-    return TrainResult(path, history, len(fit_w), len(val_w),
-                       fit_w.skipped + val_w.skipped, time.perf_counter() - t0)  # fmt: skip
+    return TrainResult(path, history, len(fit_w), len(val_w), fit_w.skipped + val_w.skipped,
+                       time.perf_counter() - t0, refit_history,
+                       len(w.whole) if refit_history else 0)  # fmt: skip
 
 
 def evaluate_checkpoint(
