@@ -42,28 +42,18 @@ class TrainResult:
     refit_windows: int = 0
 
 
-@dataclass
-class SplitWindows:
-    fit: Windows  # the training part less each clip's validation tail and the gap before it
-    val: Windows  # the validation tails (early stopping)
-    whole: Windows  # the whole training part (the refit)
-    test: Windows  # empty for `all`
-
-
 def split_windows(
     data: LoadedData, split: str, stride: int, max_gap: int, test_stride: int | None = None
-) -> SplitWindows:
-    """A split's windows: fit and validation come from its training part (validation is
-    the tail of each clip's part), test from its test part."""
+) -> tuple[Windows, Windows, Windows]:
+    """(fit, validation, test) windows for a split; validation is the tail of each
+    training part, test is empty for `all`."""
     parts = split_clips(data.clips, split, WINDOW, data.uav_dir)
     fit_parts, val_parts = validation_parts(parts.train, WINDOW)
     names: list[str] = []
-    return SplitWindows(
-        fit=make_windows(fit_parts, WINDOW, stride, max_gap, names),
-        val=make_windows(val_parts, WINDOW, stride, max_gap, names),
-        whole=make_windows(parts.train, WINDOW, stride, max_gap, names),
-        test=make_windows(parts.test, WINDOW, test_stride or stride, max_gap, names),
-    )
+    fit_w = make_windows(fit_parts, WINDOW, stride, max_gap, names)
+    val_w = make_windows(val_parts, WINDOW, stride, max_gap, names)
+    test_w = make_windows(parts.test, WINDOW, test_stride or stride, max_gap, names)
+    return fit_w, val_w, test_w
 
 
 def train_model(
@@ -86,8 +76,7 @@ def train_model(
     called when the refit starts; `on_epoch` is called for both runs' epochs."""
     t0 = time.perf_counter()
     data = load_data(data_specs)
-    w = split_windows(data, split, cfg.stride, cfg.max_gap)
-    fit_w, val_w = w.fit, w.val
+    fit_w, val_w, _ = split_windows(data, split, cfg.stride, cfg.max_gap)
     if on_start:
         on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
     pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
@@ -95,13 +84,18 @@ def train_model(
     model = build_model(model_name, num_features=pipeline.num_features)
     history = fit(model, pipeline, fit_w, val_w, cfg, on_epoch)
     refit_history: list[EpochLog] = []
+    refit_windows = 0
     if cfg.refit and len(val_w):
+        # the whole training part: fit, the gaps before the validation tails, the tails
+        whole = make_windows(split_clips(data.clips, split, WINDOW, data.uav_dir).train,
+                             WINDOW, cfg.stride, cfg.max_gap)  # fmt: skip
         lrs = chosen_schedule(history, cfg.lr)
         if on_refit:
-            on_refit(len(w.whole), len(lrs))
+            on_refit(len(whole), len(lrs))
         torch.manual_seed(cfg.seed)
         model = build_model(model_name, num_features=pipeline.num_features)
-        refit_history = fit_schedule(model, pipeline, w.whole, cfg, lrs, on_epoch)
+        refit_history = fit_schedule(model, pipeline, whole, cfg, lrs, on_epoch)
+        refit_windows = len(whole)
     meta = {
         "command": command,
         "split": split,
@@ -112,12 +106,11 @@ def train_model(
         "train_windows": len(fit_w),
         "val_windows": len(val_w),
         "refit_epochs": len(refit_history),
-        "refit_windows": len(w.whole) if refit_history else 0,
+        "refit_windows": refit_windows,
     }
     path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta)
     return TrainResult(path, history, len(fit_w), len(val_w), fit_w.skipped + val_w.skipped,
-                       time.perf_counter() - t0, refit_history,
-                       len(w.whole) if refit_history else 0)  # fmt: skip
+                       time.perf_counter() - t0, refit_history, refit_windows)  # fmt: skip
 
 
 def evaluate_checkpoint(
