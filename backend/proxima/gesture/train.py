@@ -50,8 +50,8 @@ class TrainConfig:
     label_smoothing: float = 0.05
     # After early stopping, train a fresh model on the whole training part (validation
     # tails included) for the epochs it chose. Off: it raised the temporal split's window
-    # accuracy (4 seeds, mean 0.929 -> 0.942) but made the live model confidently wrong
-    # on the left view's not_clear (docs/gesture.md).
+    # accuracy (seeds 0-2, 0.920 / 0.931 / 0.935 -> 0.939 / 0.937 / 0.940) but made the
+    # live model confidently wrong, mostly on the left view's not_clear (docs/gesture.md).
     refit: bool = False
     threads: int = 2
     extra: dict = field(default_factory=dict)
