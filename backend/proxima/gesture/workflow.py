@@ -12,7 +12,8 @@ from typing import Any
 import torch
 
 from proxima.gesture.classifier import GestureClassifier, save_checkpoint
-from proxima.gesture.datasets import LoadedData, load_data
+from proxima.gesture.clip import Clip
+from proxima.gesture.datasets import load_data
 from proxima.gesture.evaluate import metrics
 from proxima.gesture.features import make_pipeline
 from proxima.gesture.geometry import to_metric
@@ -39,21 +40,17 @@ class TrainResult:
     seconds: float
     # the refit on the whole training part (empty when off or without validation)
     refit_history: list[EpochLog] = field(default_factory=list)
-    refit_windows: int = 0
 
 
-def split_windows(
-    data: LoadedData, split: str, stride: int, max_gap: int, test_stride: int | None = None
-) -> tuple[Windows, Windows, Windows]:
-    """(fit, validation, test) windows for a split; validation is the tail of each
-    training part, test is empty for `all`."""
-    parts = split_clips(data.clips, split, WINDOW, data.uav_dir)
-    fit_parts, val_parts = validation_parts(parts.train, WINDOW)
+def fit_and_validation_windows(
+    train: Sequence[Clip], stride: int, max_gap: int
+) -> tuple[Windows, Windows]:
+    """Windows of a split's training part: (fit, validation), where validation is the
+    tail of each clip's part (see `validation_parts`)."""
+    fit_parts, val_parts = validation_parts(train, WINDOW)
     names: list[str] = []
     fit_w = make_windows(fit_parts, WINDOW, stride, max_gap, names)
-    val_w = make_windows(val_parts, WINDOW, stride, max_gap, names)
-    test_w = make_windows(parts.test, WINDOW, test_stride or stride, max_gap, names)
-    return fit_w, val_w, test_w
+    return fit_w, make_windows(val_parts, WINDOW, stride, max_gap, names)
 
 
 def train_model(
@@ -76,7 +73,8 @@ def train_model(
     called when the refit starts; `on_epoch` is called for both runs' epochs."""
     t0 = time.perf_counter()
     data = load_data(data_specs)
-    fit_w, val_w, _ = split_windows(data, split, cfg.stride, cfg.max_gap)
+    train = split_clips(data.clips, split, WINDOW, data.uav_dir).train
+    fit_w, val_w = fit_and_validation_windows(train, cfg.stride, cfg.max_gap)
     if on_start:
         on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
     pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
@@ -87,8 +85,7 @@ def train_model(
     refit_windows = 0
     if cfg.refit and len(val_w):
         # the whole training part: fit, the gaps before the validation tails, the tails
-        whole = make_windows(split_clips(data.clips, split, WINDOW, data.uav_dir).train,
-                             WINDOW, cfg.stride, cfg.max_gap)  # fmt: skip
+        whole = make_windows(train, WINDOW, cfg.stride, cfg.max_gap)
         lrs = chosen_schedule(history, cfg.lr)
         if on_refit:
             on_refit(len(whole), len(lrs))
@@ -110,7 +107,7 @@ def train_model(
     }
     path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta)
     return TrainResult(path, history, len(fit_w), len(val_w), fit_w.skipped + val_w.skipped,
-                       time.perf_counter() - t0, refit_history, refit_windows)  # fmt: skip
+                       time.perf_counter() - t0, refit_history)  # fmt: skip
 
 
 def evaluate_checkpoint(
