@@ -45,6 +45,11 @@ def test_evaluate_writes_the_named_fields_and_a_confusion_png(
     assert set(m["per_class"]) == set(GESTURES)
     assert np.asarray(m["confusion"]).shape == (13, 13)
     assert m["clips"] == 39
+    # every LASER view is scored on its own, and together they are the whole test part
+    assert set(m["per_view"]) == {"f", "l", "r"}
+    assert sum(v["windows"] for v in m["per_view"].values()) == m["windows"]
+    overall = sum(v["accuracy"] * v["windows"] for v in m["per_view"].values()) / m["windows"]
+    assert abs(overall - m["accuracy"]) < 1e-9
     # four epochs on coarse windows already learn far above chance (1/13)
     assert m["accuracy"] > 0.3
     assert out.with_suffix(".png").stat().st_size > 10_000

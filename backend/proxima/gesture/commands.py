@@ -139,10 +139,11 @@ def evaluate(
         result["confusion"], json_out.with_suffix(".png"),
         f"{checkpoint.name} on {split}: accuracy {result['accuracy']:.3f}",
     )  # fmt: skip
+    views = ", ".join(f"{v} {r['accuracy']:.3f}" for v, r in result["per_view"].items())
     typer.echo(
-        f"{split}: accuracy {result['accuracy']:.3f}, macro F1 {result['macro_f1']:.3f}, "
-        f"clip accuracy {result['clip_accuracy']:.3f} ({result['windows']} windows, "
-        f"{result['clips']} clips) -> {json_out}, {png}"
+        f"{split}: accuracy {result['accuracy']:.3f} (per view: {views}), macro F1 "
+        f"{result['macro_f1']:.3f}, clip accuracy {result['clip_accuracy']:.3f} "
+        f"({result['windows']} windows, {result['clips']} clips) -> {json_out}, {png}"
     )
 
 

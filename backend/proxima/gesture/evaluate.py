@@ -1,6 +1,7 @@
 """Metrics for a checkpoint on a split's test windows: per window (accuracy, macro
-precision / recall / F1, per class, confusion) and per clip (one decision per clip from
-its windows' mean probabilities), plus a confusion-matrix picture."""
+precision / recall / F1, per class, confusion, per camera view) and per clip (one
+decision per clip from its windows' mean probabilities), plus a confusion-matrix
+picture."""
 
 from __future__ import annotations
 
@@ -46,6 +47,15 @@ def metrics(y_true: np.ndarray, probs: np.ndarray, clip: np.ndarray) -> dict[str
         "confusion": confusion_matrix(y_true, y_pred, labels=labels).tolist(),
         "clip_accuracy": float(np.mean(np.asarray(clip_true) == np.asarray(clip_pred))),
     }
+
+
+def accuracy_by(group: np.ndarray, y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, Any]:
+    """Window accuracy and window count for each value of `group` (e.g. the camera view)."""
+    return {
+        str(g): {"accuracy": float((y_pred[group == g] == y_true[group == g]).mean()),
+                 "windows": int((group == g).sum())}
+        for g in np.unique(group)
+    }  # fmt: skip
 
 
 def plot_confusion(confusion: list[list[int]], path: str | Path, title: str) -> Path:

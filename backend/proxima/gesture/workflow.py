@@ -9,12 +9,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import torch
 
 from proxima.gesture.classifier import GestureClassifier, save_checkpoint
 from proxima.gesture.clip import Clip
 from proxima.gesture.datasets import load_data
-from proxima.gesture.evaluate import metrics
+from proxima.gesture.evaluate import accuracy_by, metrics
 from proxima.gesture.features import make_pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
@@ -123,7 +124,12 @@ def evaluate_checkpoint(
     parts = split_clips(data.clips, split, clf.window, data.uav_dir)
     test = parts.test if parts.test else parts.train  # `all`: the training data itself
     w = make_windows(test, clf.window, stride, max_gap)
-    result = metrics(w.labels, predict_proba(clf.model, features(clf.pipeline, w)), w.clip)
+    probs = predict_proba(clf.model, features(clf.pipeline, w))
+    result = metrics(w.labels, probs, w.clip)
+    # The LASER side views are where the model is weakest: report each view on its own.
+    view_of = {c.name: c.view for c in test}
+    views = np.array([view_of[w.clip_names[c]] for c in w.clip])
     result.update(split=split, checkpoint=str(checkpoint), skipped_windows=w.skipped,
-                  model=clf.model_name)  # fmt: skip
+                  model=clf.model_name,
+                  per_view=accuracy_by(views, w.labels, probs.argmax(axis=1)))  # fmt: skip
     return result
