@@ -28,11 +28,14 @@ class PoseEvent(Event):
 
 @dataclass(frozen=True, kw_only=True)
 class GestureEvent(Event):
-    """One raw classification of the last window of a stream."""
+    """One raw classification of the last window of a stream. `withheld` names the
+    gestures the filter did not get from it (the thumb gestures, when the window does not
+    see the operator's hand; see control/evidence.py)."""
 
     gesture: str
     confidence: float
     probs: list[float]
+    withheld: list[str] = field(default_factory=list)
     type: str = field(default="gesture", init=False)
 
 

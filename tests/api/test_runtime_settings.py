@@ -47,3 +47,14 @@ def test_a_misspelt_gesture_in_confirm_by_command_is_refused(tmp_path: Path) -> 
         ControlSettings(confirm_by_command={"lnad": 9})
     with pytest.raises(ValidationError, match="greater than or equal to 1"):
         ControlSettings(confirm_by_command={"land": 0})
+
+
+def test_the_thumb_hand_is_set_from_the_console_file(tmp_path: Path) -> None:
+    path = tmp_path / "console.toml"
+    path.write_text('[recognition]\nthumb_hand = "left"\n')
+    assert control_settings(Settings.load(path)).thumb_hand == "left"
+    assert control_settings(Settings()).thumb_hand == "right"
+    path.write_text('[recognition]\nthumb_hand = "both"\n')
+    with pytest.raises(SettingsError) as err:
+        Settings.load(path)
+    assert "recognition.thumb_hand" in str(err.value)

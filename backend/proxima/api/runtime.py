@@ -39,6 +39,7 @@ def control_settings(settings: Settings) -> Any:
         "confirm": "confirm",
         "confirm_by_command": "confirm_by_command",
         "threshold_by_command": "threshold_by_command",
+        "thumb_hand": "thumb_hand",
     }
     overrides = {
         theirs: getattr(r, ours) for ours, theirs in names.items() if getattr(r, ours) is not None

@@ -1,14 +1,16 @@
 """From recognitions to commands: the moving-average filter, the debounce, arming and the
 priority arbiter across the streams that watch the operator.
 
-Public API: `ControlSettings`, `MovingAverageFilter`, `CommandGate`, `Arming`,
-`PriorityArbiter`, `Sight`, `CommandController`, `StreamUpdate`. Everything runs on stream time.
+Public API: `ControlSettings`, `MovingAverageFilter`, `HandEvidence`, `CommandGate`,
+`Arming`, `PriorityArbiter`, `Sight`, `CommandController`, `StreamUpdate`. Everything runs
+on stream time.
 """
 
 from proxima.control.arbiter import Handover, PriorityArbiter, Sight
 from proxima.control.arming import ABORT_GESTURE, ARM_GESTURE, Arming
 from proxima.control.config import ControlSettings
 from proxima.control.controller import SAFE_COMMAND, CommandController, StreamUpdate
+from proxima.control.evidence import HandEvidence
 from proxima.control.gate import CommandGate
 from proxima.control.smoothing import FilteredAction, MovingAverageFilter
 
@@ -21,6 +23,7 @@ __all__ = [
     "CommandGate",
     "ControlSettings",
     "FilteredAction",
+    "HandEvidence",
     "Handover",
     "MovingAverageFilter",
     "PriorityArbiter",

@@ -6,7 +6,7 @@ the same. Defaults were tuned with `bench/command_latency.py` (see docs/recognit
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
@@ -72,6 +72,14 @@ class ControlSettings(BaseModel):
     )
     filter_reset_s: float = Field(
         1.0, gt=0.0, description="a pause between recognitions this long empties the filter"
+    )
+    thumb_hand: Literal["right", "left", "off"] = Field(
+        "right",
+        description="the operator's hand for all_clear and not_clear, which only its thumb "
+        "tells apart: a window that does not see it commands neither ('off': no check)",
+    )
+    hand_visibility: float = Field(
+        0.5, ge=0.0, le=1.0, description="finger visibility that counts as the hand seen"
     )
     idle_disarm_s: float = Field(
         60.0, gt=0.0, description="disarm after this long without a command"

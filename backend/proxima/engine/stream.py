@@ -1,5 +1,5 @@
 """One stream's recognition: frame -> operator pose -> sight -> window -> classifier ->
-moving-average filter, publishing pose, gesture and action events on the way.
+hand evidence -> moving-average filter, publishing pose, gesture and action events on the way.
 
 Replayed frames carry their pose, so pose estimation and operator tracking are skipped
 for them (the replayed landmarks are used exactly as recorded); camera frames go through
@@ -15,7 +15,14 @@ from typing import Protocol
 
 import numpy as np
 
-from proxima.control import ControlSettings, MovingAverageFilter, Sight, StreamUpdate
+from proxima.control import (
+    ControlSettings,
+    HandEvidence,
+    MovingAverageFilter,
+    Sight,
+    StreamUpdate,
+)
+from proxima.control.evidence import THUMB_GESTURES
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.window import PoseWindow
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
@@ -76,6 +83,7 @@ class StreamPipeline:
         self.publish = publish
         self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
         self.filter = MovingAverageFilter.from_settings(control, classifier.labels)
+        self.evidence = HandEvidence.from_settings(control, classifier.labels)
         self.frames = 0
         self.classifications = 0
         self._pose_stage: ImagePoseStage | None = None
@@ -142,6 +150,7 @@ class StreamPipeline:
         probs = np.asarray(self.classifier.predict(xyz, vis, aspect=aspect))[0]
         self.classifications += 1
         best = int(np.argmax(probs))
+        evidence, withheld = self.evidence.apply(probs, vis[0])
         self.publish(
             GestureEvent(
                 t=t,
@@ -149,9 +158,10 @@ class StreamPipeline:
                 gesture=self.classifier.labels[best],
                 confidence=round(float(probs[best]), 4),
                 probs=[round(float(p), 4) for p in probs],
+                withheld=list(THUMB_GESTURES) if withheld else [],
             )
         )
-        decision = self.filter.update(t, probs)
+        decision = self.filter.update(t, evidence)
         self.publish(
             ActionEvent(
                 t=t,

@@ -1,0 +1,48 @@
+"""The thumb gestures need the operator's hand in view: checked on the LASER clips, where
+the left camera sees the operator's left side and the right hand is behind the body."""
+
+import numpy as np
+import pytest
+from pydantic import ValidationError
+
+from proxima.control import ControlSettings, HandEvidence
+from proxima.control.evidence import hand_seen
+from proxima.types import GESTURES
+
+
+def windows_seen(clip, hand: str) -> float:
+    """Share of a clip's 60-frame windows (step 30) that see `hand`."""
+    starts = range(0, len(clip) - 60, 30)
+    return float(np.mean([hand_seen(clip.visibility[s : s + 60], hand, 0.5) for s in starts]))
+
+
+def test_the_side_cameras_see_the_hand_on_their_side_only(laser_clips) -> None:
+    clips = {c.name.split("_", 2)[2]: c for c in laser_clips}
+    for gesture in ("all_clear", "not_clear"):
+        assert windows_seen(clips[f"{gesture}_f"], "right") == 1.0
+        assert windows_seen(clips[f"{gesture}_r"], "right") == 1.0
+        assert windows_seen(clips[f"{gesture}_l"], "right") == 0.0
+        assert windows_seen(clips[f"{gesture}_l"], "left") > 0.8
+
+
+def test_only_the_thumb_gestures_are_withheld_when_the_hand_is_hidden(laser_clips) -> None:
+    hidden = next(c for c in laser_clips if c.name.endswith("all_clear_l")).visibility[:60]
+    seen = next(c for c in laser_clips if c.name.endswith("all_clear_f")).visibility[:60]
+    probs = np.full(len(GESTURES), 1.0 / len(GESTURES))
+    evidence = HandEvidence.from_settings(ControlSettings(), GESTURES)
+    out, withheld = evidence.apply(probs, hidden)
+    assert withheld
+    zero = [GESTURES.index("all_clear"), GESTURES.index("not_clear")]
+    assert out[zero].tolist() == [0.0, 0.0]
+    assert np.delete(out, zero).tolist() == np.delete(probs, zero).tolist()
+    assert probs[zero].tolist() != [0.0, 0.0]  # the caller's array is left alone
+    assert evidence.apply(probs, seen) == (probs, False)
+    no_check = HandEvidence.from_settings(ControlSettings(thumb_hand="off"), GESTURES)
+    assert no_check.apply(probs, hidden) == (probs, False)
+
+
+def test_a_bad_hand_setting_is_refused() -> None:
+    with pytest.raises(ValidationError, match="thumb_hand"):
+        ControlSettings(thumb_hand="middle")
+    with pytest.raises(ValueError, match="hand must be one of left, right or off"):
+        HandEvidence(GESTURES, "middle")
