@@ -3,7 +3,7 @@ from __future__ import annotations
 import numpy as np
 
 from proxima.gesture.augment import mirror, rotate, time_warp, transitions
-from proxima.gesture.features import BodyPipeline, PaperPipeline
+from proxima.gesture.features import BodyImagePipeline, BodyPipeline, PaperPipeline, make_pipeline
 from proxima.gesture.geometry import rotation_matrix, to_metric
 from proxima.gesture.windows import make_windows
 from proxima.types import GESTURES
@@ -41,6 +41,18 @@ def test_body_features_are_scale_and_position_free(laser_clips) -> None:
     m = to_metric(w.xyz, w.aspect)
     body = BodyPipeline()
     np.testing.assert_allclose(body.transform(m), body.transform(2.5 * m + 0.3), atol=1e-4)
+
+
+def test_body_image_features_are_body_features_without_the_turn(laser_clips) -> None:
+    w = _windows(laser_clips, "l")
+    m = to_metric(w.xyz, w.aspect)
+    image = make_pipeline("body-image", {})
+    assert isinstance(image, BodyImagePipeline) and image.num_features == 80
+    unturned = BodyPipeline().transform(m, np.zeros(len(w), dtype=bool))
+    np.testing.assert_array_equal(image.transform(m, w.has_z), unturned)
+    # a side view is near profile: turning it to face the camera changes the picture
+    assert np.abs(BodyPipeline().transform(m, w.has_z) - unturned).max() > 0.5
+    np.testing.assert_allclose(image.transform(m), image.transform(2.5 * m + 0.3), atol=1e-4)
 
 
 def test_paper_scaling_is_fitted_on_training_data_only(laser_clips) -> None:

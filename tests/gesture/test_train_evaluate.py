@@ -125,3 +125,19 @@ def test_train_with_refit_saves_the_model_trained_on_the_whole_training_part(
     # the whole part holds the validation tails and the gaps before them too
     assert meta["refit_windows"] > meta["train_windows"] + meta["val_windows"]
     assert meta["train_config"]["refit"] is True
+
+
+def test_train_and_evaluate_with_the_body_image_pipeline(laser_dir, tmp_path) -> None:
+    out = tmp_path / "image.pt"
+    result = CliRunner().invoke(
+        app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
+              "--epochs", "2", "--stride", "12", "--threads", "1", "--pipeline", "body-image"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert GestureClassifier.load(out).pipeline.name == "body-image"
+    result = CliRunner().invoke(
+        app, ["evaluate", "--checkpoint", str(out), "--data", str(laser_dir),
+              "--split", "temporal", "--json", str(tmp_path / "image.json")],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert json.loads((tmp_path / "image.json").read_text())["accuracy"] > 1 / 13
