@@ -141,3 +141,20 @@ def test_train_and_evaluate_with_the_body_image_pipeline(laser_dir, tmp_path) ->
     )  # fmt: skip
     assert result.exit_code == 0, result.output
     assert json.loads((tmp_path / "image.json").read_text())["accuracy"] > 1 / 13
+
+
+def test_one_seed_trains_one_model(laser_dir, tmp_path) -> None:
+    # The initial weights are seeded too: two runs of one command give the same file
+    # content, a third with another seed does not.
+    def train(name: str, seed: int) -> dict:
+        out = tmp_path / name
+        result = CliRunner().invoke(
+            app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
+                  "--epochs", "1", "--stride", "16", "--threads", "1", "--seed", str(seed)],
+        )  # fmt: skip
+        assert result.exit_code == 0, result.output
+        return torch.load(out, weights_only=True)["state_dict"]
+
+    a, b, c = train("a.pt", 3), train("b.pt", 3), train("c.pt", 4)
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    assert not all(torch.equal(a[k], c[k]) for k in a)

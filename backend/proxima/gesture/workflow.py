@@ -80,6 +80,7 @@ def train_model(
         on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
     pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
     pipeline.fit(to_metric(fit_w.xyz, fit_w.aspect))
+    torch.manual_seed(cfg.seed)  # the initial weights too: one seed, one model
     model = build_model(model_name, num_features=pipeline.num_features)
     history = fit(model, pipeline, fit_w, val_w, cfg, on_epoch)
     refit_history: list[EpochLog] = []
