@@ -90,7 +90,8 @@ on("thumbnail", (msg) => {
 });
 
 const liveFields = {
-  gesture: (s, m) => Object.assign(s.live, { gesture: m.gesture, gesture_confidence: m.confidence }),
+  gesture: (s, m) =>
+    Object.assign(s.live, { gesture: m.gesture, gesture_confidence: m.confidence, withheld: m.withheld || [] }),
   action: (s, m) => Object.assign(s.live, { action: m.action, action_confidence: m.confidence }),
   arming: (s, m) => Object.assign(s.live, { armed: m.armed, arming_reason: m.reason }),
   stream: (s, m) => Object.assign(s.live, { state: m.state, state_detail: m.detail }),

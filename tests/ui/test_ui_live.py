@@ -92,3 +92,33 @@ def test_tiles_follow_the_engine(page, tmp_path: Path, checkpoint: Path) -> None
     finally:
         gestures.close()
         console.close()
+
+
+def test_a_thumb_gesture_the_camera_cannot_confirm_is_marked_withheld(  # type: ignore[no-untyped-def]
+    page, tmp_path: Path, checkpoint: Path
+) -> None:
+    # The left camera sees the operator's left side: the right hand, whose thumb tells
+    # all_clear from not_clear, is behind the body.
+    console = start_console(
+        tmp_path,
+        with_engine=True,
+        streams=[
+            {"name": "left", "uri": f"replay:{laser_clip('all_clear_l')}@30", "drone": "main"}
+        ],
+        drones=[{"name": "main", "connection": "udpin:127.0.0.1:14550"}],
+        recognition={"checkpoint": str(checkpoint)},
+    )
+    assert console.runtime.engine is not None, console.runtime.notes
+    try:
+        login(page, console.url)
+        field = "article.tile[data-stream=left] .value.gesture"
+        page.wait_for_selector(field)
+        text = wait_for(
+            lambda: "hand not seen: withheld" in (t := page.inner_text(field)) and t,
+            timeout=30,
+            what="the withheld mark",
+        )
+        assert text.split(" ")[0] in ("all_clear", "not_clear")
+        assert "withheld" in page.get_attribute(field, "class")
+    finally:
+        console.close()

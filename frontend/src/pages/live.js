@@ -62,7 +62,13 @@ function renderTileText(s, t) {
     ...(driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
   );
   const lv = s.live;
-  t.f.gesture.textContent = lv.gesture ? `${lv.gesture} ${pct(lv.gesture_confidence)}` : "—";
+  // all_clear / not_clear differ only in the thumb: the engine withholds them from the
+  // filter when the camera does not see the operator's hand (control/evidence.py).
+  const held = Boolean(lv.gesture) && (lv.withheld || []).includes(lv.gesture);
+  t.f.gesture.textContent = lv.gesture
+    ? `${lv.gesture} ${pct(lv.gesture_confidence)}${held ? " · hand not seen: withheld" : ""}`
+    : "—";
+  t.f.gesture.classList.toggle("withheld", held);
   t.f.action.textContent = lv.action ? `${lv.action} ${pct(lv.action_confidence)}` : "—";
   t.f.armed.textContent = lv.armed ? "ARMED" : "disarmed";
   t.f.armed.className = `value armed ${lv.armed ? "on" : "off"}`;
