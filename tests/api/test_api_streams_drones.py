@@ -27,6 +27,12 @@ def test_streams_show_live_state(api: Api) -> None:
     )
     front = c.get("/api/streams/front", headers=api.viewer).json()
     assert front["live"]["state"] == "live" and front["live"]["gesture"] == "hover"
+    assert front["live"]["withheld"] == []
+    thumb = ["all_clear", "not_clear"]
+    bus.publish(GestureEvent(t=2.2, stream="left", gesture="all_clear", confidence=0.95,
+                             probs=[], withheld=thumb))  # fmt: skip
+    left = c.get("/api/streams/left", headers=api.viewer).json()
+    assert left["live"]["gesture"] == "all_clear" and left["live"]["withheld"] == thumb
     assert front["live"]["armed"] is True and front["driving"] is False
     assert c.get("/api/streams/left", headers=api.viewer).json()["driving"] is True
     assert c.get("/api/streams/nope", headers=api.viewer).status_code == 404

@@ -52,6 +52,7 @@ class LiveState:
                 s = self._stream(event.stream)
                 s["gesture"] = getattr(event, "gesture", "")
                 s["gesture_confidence"] = float(getattr(event, "confidence", 0.0))
+                s["withheld"] = list(getattr(event, "withheld", []))
             elif kind == "action":
                 s = self._stream(event.stream)
                 s["action"] = getattr(event, "action", "")
