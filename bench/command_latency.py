@@ -131,7 +131,7 @@ def simulate(
     than in the engine. The stream's end is reported last, as the engine does."""
     t = (stream.frames - 1) / stream.fps
     filt = MovingAverageFilter.from_settings(control, labels)
-    evidence = HandEvidence.from_settings(control, labels)
+    evidence = HandEvidence.from_settings(control)
     ctl = CommandController(["main"], "main", control)
     run = Run()
     classify_at = (k >= size) & ((k - size) % stride == 0)
@@ -149,8 +149,8 @@ def simulate(
             if k[i] == size:  # a new window stretch: the engine's filter restarts too
                 filt.reset()
             # the window's rows: the last `size` of the stretch (k counts them)
-            p_i, _ = evidence.apply(probs[i], stream.visibility[i - size + 1 : i + 1])
-            action = filt.update(float(t[i]), p_i).action
+            withheld = evidence.withholds(stream.visibility[i - size + 1 : i + 1])
+            action = evidence.action(filt.update(float(t[i]), probs[i]).action, withheld)
             top = labels[int(np.argmax(probs[i]))]
             run.recognitions.append((float(t[i]), top, action, bool(k[i] == size)))
         for e in ctl.process(StreamUpdate("main", float(t[i]), Sight(sight[i]), action)):

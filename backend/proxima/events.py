@@ -29,8 +29,8 @@ class PoseEvent(Event):
 @dataclass(frozen=True, kw_only=True)
 class GestureEvent(Event):
     """One raw classification of the last window of a stream. `withheld` names the
-    gestures the filter did not get from it (the thumb gestures, when the window does not
-    see the operator's hand; see control/evidence.py)."""
+    gestures that may not be the filtered action while this is the newest window (the
+    thumb gestures, when it does not see the operator's hand; see control/evidence.py)."""
 
     gesture: str
     confidence: float

@@ -25,24 +25,22 @@ def test_the_side_cameras_see_the_hand_on_their_side_only(laser_clips) -> None:
         assert windows_seen(clips[f"{gesture}_l"], "left") > 0.8
 
 
-def test_only_the_thumb_gestures_are_withheld_when_the_hand_is_hidden(laser_clips) -> None:
+def test_a_hidden_hand_withholds_only_the_thumb_gestures(laser_clips) -> None:
     hidden = next(c for c in laser_clips if c.name.endswith("all_clear_l")).visibility[:60]
     seen = next(c for c in laser_clips if c.name.endswith("all_clear_f")).visibility[:60]
-    probs = np.full(len(GESTURES), 1.0 / len(GESTURES))
-    evidence = HandEvidence.from_settings(ControlSettings(), GESTURES)
-    out, withheld = evidence.apply(probs, hidden)
-    assert withheld
-    zero = [GESTURES.index("all_clear"), GESTURES.index("not_clear")]
-    assert out[zero].tolist() == [0.0, 0.0]
-    assert np.delete(out, zero).tolist() == np.delete(probs, zero).tolist()
-    assert probs[zero].tolist() != [0.0, 0.0]  # the caller's array is left alone
-    assert evidence.apply(probs, seen) == (probs, False)
-    no_check = HandEvidence.from_settings(ControlSettings(thumb_hand="off"), GESTURES)
-    assert no_check.apply(probs, hidden) == (probs, False)
+    evidence = HandEvidence.from_settings(ControlSettings())
+    assert evidence.withholds(hidden) and not evidence.withholds(seen)
+    # a withheld gesture becomes no action at all, never the next-best gesture
+    assert [evidence.action(g, True) for g in GESTURES] == [
+        "" if g in ("all_clear", "not_clear") else g for g in GESTURES
+    ]
+    assert [evidence.action(g, False) for g in GESTURES] == list(GESTURES)
+    assert not HandEvidence.from_settings(ControlSettings(thumb_hand="off")).withholds(hidden)
+    assert not HandEvidence("left").withholds(hidden)  # the left hand faces that camera
 
 
 def test_a_bad_hand_setting_is_refused() -> None:
     with pytest.raises(ValidationError, match="thumb_hand"):
         ControlSettings(thumb_hand="middle")
     with pytest.raises(ValueError, match="hand must be one of left, right or off"):
-        HandEvidence(GESTURES, "middle")
+        HandEvidence("middle")

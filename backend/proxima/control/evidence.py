@@ -3,12 +3,12 @@
 `all_clear` and `not_clear` differ only in the thumb (up or down). Where the camera does
 not see the hand that gives them (a side view with the hand behind the body), the
 classifier can only guess between the two from the arm, and a guess must not become a
-command: both are withheld from the filter for that window.
+command: while the newest window does not see the hand, neither may be the filtered action
+(the action is then none, never the next-best gesture).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -30,26 +30,23 @@ def hand_seen(visibility: np.ndarray, hand: str, min_visibility: float) -> bool:
 
 
 class HandEvidence:
-    """Zeroes the thumb gestures' probabilities for windows that do not see `hand`
-    ("off": never)."""
+    """Withholds the thumb gestures while the window does not see `hand` ("off": never)."""
 
-    def __init__(self, labels: Sequence[str], hand: str, min_visibility: float = 0.5) -> None:
+    def __init__(self, hand: str, min_visibility: float = 0.5) -> None:
         if hand != "off" and hand not in FINGERS:
             raise ValueError(f"hand must be one of {', '.join(FINGERS)} or off, got {hand!r}")
         self.hand = hand
         self.min_visibility = min_visibility
-        self._thumb = [i for i, g in enumerate(labels) if g in THUMB_GESTURES]
 
     @classmethod
-    def from_settings(cls, control: ControlSettings, labels: Sequence[str]) -> HandEvidence:
-        return cls(labels, control.thumb_hand, control.hand_visibility)
+    def from_settings(cls, control: ControlSettings) -> HandEvidence:
+        return cls(control.thumb_hand, control.hand_visibility)
 
-    def apply(self, probs: np.ndarray, visibility: np.ndarray) -> tuple[np.ndarray, bool]:
-        """(`probs` as the filter may use them, whether the thumb gestures were withheld):
-        a copy with the thumb gestures at 0 when the window (`visibility` (W, 33)) does
-        not see the hand, else `probs` itself."""
-        if self.hand == "off" or hand_seen(visibility, self.hand, self.min_visibility):
-            return probs, False
-        out = np.array(probs, dtype=float)
-        out[self._thumb] = 0.0
-        return out, True
+    def withholds(self, visibility: np.ndarray) -> bool:
+        """Whether the thumb gestures are withheld for a window (`visibility` (W, 33))."""
+        return self.hand != "off" and not hand_seen(visibility, self.hand, self.min_visibility)
+
+    @staticmethod
+    def action(action: str, withheld: bool) -> str:
+        """The filtered `action` as it may go on: none instead of a withheld gesture."""
+        return "" if withheld and action in THUMB_GESTURES else action

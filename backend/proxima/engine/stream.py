@@ -1,5 +1,5 @@
 """One stream's recognition: frame -> operator pose -> sight -> window -> classifier ->
-hand evidence -> moving-average filter, publishing pose, gesture and action events on the way.
+moving-average filter -> hand evidence, publishing pose, gesture and action events on the way.
 
 Replayed frames carry their pose, so pose estimation and operator tracking are skipped
 for them (the replayed landmarks are used exactly as recorded); camera frames go through
@@ -83,7 +83,7 @@ class StreamPipeline:
         self.publish = publish
         self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
         self.filter = MovingAverageFilter.from_settings(control, classifier.labels)
-        self.evidence = HandEvidence.from_settings(control, classifier.labels)
+        self.evidence = HandEvidence.from_settings(control)
         self.frames = 0
         self.classifications = 0
         self._pose_stage: ImagePoseStage | None = None
@@ -150,7 +150,7 @@ class StreamPipeline:
         probs = np.asarray(self.classifier.predict(xyz, vis, aspect=aspect))[0]
         self.classifications += 1
         best = int(np.argmax(probs))
-        evidence, withheld = self.evidence.apply(probs, vis[0])
+        withheld = self.evidence.withholds(vis[0])
         self.publish(
             GestureEvent(
                 t=t,
@@ -161,16 +161,17 @@ class StreamPipeline:
                 withheld=list(THUMB_GESTURES) if withheld else [],
             )
         )
-        decision = self.filter.update(t, evidence)
+        decision = self.filter.update(t, probs)
+        action = self.evidence.action(decision.action, withheld)
         self.publish(
             ActionEvent(
                 t=t,
                 stream=self.name,
-                action=decision.action,
+                action=action,
                 confidence=round(decision.confidence, 4),
             )
         )
-        return StreamUpdate(self.name, t, sight, decision.action, decision.confidence)
+        return StreamUpdate(self.name, t, sight, action, decision.confidence)
 
     def close(self) -> None:
         """Release the pose estimator, if one was made."""

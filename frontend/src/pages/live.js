@@ -62,8 +62,8 @@ function renderTileText(s, t) {
     ...(driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
   );
   const lv = s.live;
-  // all_clear / not_clear differ only in the thumb: the engine withholds them from the
-  // filter when the camera does not see the operator's hand (control/evidence.py).
+  // all_clear / not_clear differ only in the thumb: the engine does not let them become
+  // the action while the camera does not see the operator's hand (control/evidence.py).
   const held = Boolean(lv.gesture) && (lv.withheld || []).includes(lv.gesture);
   t.f.gesture.textContent = lv.gesture
     ? `${lv.gesture} ${pct(lv.gesture_confidence)}${held ? " · hand not seen: withheld" : ""}`
