@@ -149,7 +149,7 @@ def simulate(
             if k[i] == size:  # a new window stretch: the engine's filter restarts too
                 filt.reset()
             # the window's rows: the last `size` of the stretch (k counts them)
-            withheld = evidence.withholds(stream.visibility[i - size + 1 : i + 1])
+            withheld = evidence.withheld(stream.visibility[i - size + 1 : i + 1])
             action = evidence.action(filt.update(float(t[i]), probs[i]).action, withheld)
             top = labels[int(np.argmax(probs[i]))]
             run.recognitions.append((float(t[i]), top, action, bool(k[i] == size)))

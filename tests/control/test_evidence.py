@@ -29,14 +29,15 @@ def test_a_hidden_hand_withholds_only_the_thumb_gestures(laser_clips) -> None:
     hidden = next(c for c in laser_clips if c.name.endswith("all_clear_l")).visibility[:60]
     seen = next(c for c in laser_clips if c.name.endswith("all_clear_f")).visibility[:60]
     evidence = HandEvidence.from_settings(ControlSettings())
-    assert evidence.withholds(hidden) and not evidence.withholds(seen)
+    withheld = evidence.withheld(hidden)
+    assert withheld == ["all_clear", "not_clear"] and evidence.withheld(seen) == []
     # a withheld gesture becomes no action at all, never the next-best gesture
-    assert [evidence.action(g, True) for g in GESTURES] == [
+    assert [evidence.action(g, withheld) for g in GESTURES] == [
         "" if g in ("all_clear", "not_clear") else g for g in GESTURES
     ]
-    assert [evidence.action(g, False) for g in GESTURES] == list(GESTURES)
-    assert not HandEvidence.from_settings(ControlSettings(thumb_hand="off")).withholds(hidden)
-    assert not HandEvidence("left").withholds(hidden)  # the left hand faces that camera
+    assert [evidence.action(g, []) for g in GESTURES] == list(GESTURES)
+    assert HandEvidence.from_settings(ControlSettings(thumb_hand="off")).withheld(hidden) == []
+    assert HandEvidence("left").withheld(hidden) == []  # the left hand faces that camera
 
 
 def test_a_bad_hand_setting_is_refused() -> None:

@@ -9,6 +9,7 @@ command: while the newest window does not see the hand, neither may be the filte
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -42,11 +43,15 @@ class HandEvidence:
     def from_settings(cls, control: ControlSettings) -> HandEvidence:
         return cls(control.thumb_hand, control.hand_visibility)
 
-    def withholds(self, visibility: np.ndarray) -> bool:
-        """Whether the thumb gestures are withheld for a window (`visibility` (W, 33))."""
-        return self.hand != "off" and not hand_seen(visibility, self.hand, self.min_visibility)
+    def withheld(self, visibility: np.ndarray) -> list[str]:
+        """The gestures that may not be the filtered action while this window
+        (`visibility` (W, 33)) is the newest: the thumb gestures if it does not see the
+        hand, else none."""
+        if self.hand == "off" or hand_seen(visibility, self.hand, self.min_visibility):
+            return []
+        return list(THUMB_GESTURES)
 
     @staticmethod
-    def action(action: str, withheld: bool) -> str:
+    def action(action: str, withheld: Sequence[str]) -> str:
         """The filtered `action` as it may go on: none instead of a withheld gesture."""
-        return "" if withheld and action in THUMB_GESTURES else action
+        return "" if action in withheld else action

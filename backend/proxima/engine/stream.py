@@ -22,7 +22,6 @@ from proxima.control import (
     Sight,
     StreamUpdate,
 )
-from proxima.control.evidence import THUMB_GESTURES
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.window import PoseWindow
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
@@ -150,7 +149,7 @@ class StreamPipeline:
         probs = np.asarray(self.classifier.predict(xyz, vis, aspect=aspect))[0]
         self.classifications += 1
         best = int(np.argmax(probs))
-        withheld = self.evidence.withholds(vis[0])
+        withheld = self.evidence.withheld(vis[0])
         self.publish(
             GestureEvent(
                 t=t,
@@ -158,7 +157,7 @@ class StreamPipeline:
                 gesture=self.classifier.labels[best],
                 confidence=round(float(probs[best]), 4),
                 probs=[round(float(p), 4) for p in probs],
-                withheld=list(THUMB_GESTURES) if withheld else [],
+                withheld=withheld,
             )
         )
         decision = self.filter.update(t, probs)

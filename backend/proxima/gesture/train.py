@@ -150,6 +150,18 @@ def _train_epoch(
     return total / max(len(order), 1)
 
 
+def _start(
+    model: nn.Module, train: Windows, cfg: TrainConfig
+) -> tuple[np.random.Generator, np.ndarray, torch.optim.Optimizer, nn.Module]:
+    """What every run sets up first: (the seeded rng, the metric windows, the optimiser,
+    the loss), with torch's threads and seeds set."""
+    torch.set_num_threads(cfg.threads)
+    rng = seed_everything(cfg.seed)
+    metric = to_metric(train.xyz, train.aspect)
+    opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    return rng, metric, opt, nn.CrossEntropyLoss(label_smoothing=cfg.label_smoothing)
+
+
 def fit(
     model: nn.Module,
     pipeline: Pipeline,
@@ -165,15 +177,11 @@ def fit(
     batch's loss (federated clients use it for FedProx's proximal term). Returns one log
     entry per epoch.
     """
-    torch.set_num_threads(cfg.threads)
-    rng = seed_everything(cfg.seed)
-    metric = to_metric(train.xyz, train.aspect)
+    rng, metric, opt, loss_fn = _start(model, train, cfg)
     xv = features(pipeline, val) if val is not None and len(val) else None
-    opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     sched = torch.optim.lr_scheduler.ReduceLROnPlateau(
         opt, factor=cfg.lr_factor, patience=cfg.lr_patience
     )
-    loss_fn = nn.CrossEntropyLoss(label_smoothing=cfg.label_smoothing)
     best = (float("inf"), copy.deepcopy(model.state_dict()))
     history: list[EpochLog] = []
     since_best = 0
@@ -229,11 +237,7 @@ def fit_schedule(
     """Train `model` in place for one epoch per entry of `lrs`, at that learning rate,
     with the same augmentation and clipping as `fit` and no validation (the log's
     validation fields are NaN)."""
-    torch.set_num_threads(cfg.threads)
-    rng = seed_everything(cfg.seed)
-    metric = to_metric(train.xyz, train.aspect)
-    opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    loss_fn = nn.CrossEntropyLoss(label_smoothing=cfg.label_smoothing)
+    rng, metric, opt, loss_fn = _start(model, train, cfg)
     history: list[EpochLog] = []
     for epoch, lr in enumerate(lrs, start=1):
         t0 = time.perf_counter()
