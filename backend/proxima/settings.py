@@ -25,7 +25,7 @@ from pydantic_settings import (
     SettingsConfigDict,
 )
 
-from proxima.control.config import ConfirmByCommand, ThresholdByCommand
+from proxima.control.config import ConfirmByCommand, ThresholdByCommand, ThumbHand
 
 URI_SCHEMES = ("webcam:", "file:", "rtsp://", "rtsps://", "replay:")
 
@@ -136,7 +136,7 @@ class RecognitionSettings(_Section):
     threshold_by_command: ThresholdByCommand | None = Field(
         None, description="threshold per command, e.g. {wave_off = 0.7}: an easier abort"
     )
-    thumb_hand: Literal["right", "left", "off"] | None = Field(
+    thumb_hand: ThumbHand | None = Field(
         None, description="the hand all_clear / not_clear need in view ('off': no check)"
     )
     operator_lost_hover_s: float = Field(5.0, gt=0, description="hover after this long")

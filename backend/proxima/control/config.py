@@ -29,6 +29,8 @@ ConfirmByCommand = Annotated[
 ThresholdByCommand = Annotated[
     dict[str, Annotated[float, Field(gt=0.0, le=1.0)]], AfterValidator(_known_gestures)
 ]
+# The operator's hand that all_clear / not_clear need in view; "off": no check.
+ThumbHand = Literal["right", "left", "off"]
 
 
 class ControlSettings(BaseModel):
@@ -73,7 +75,7 @@ class ControlSettings(BaseModel):
     filter_reset_s: float = Field(
         1.0, gt=0.0, description="a pause between recognitions this long empties the filter"
     )
-    thumb_hand: Literal["right", "left", "off"] = Field(
+    thumb_hand: ThumbHand = Field(
         "right",
         description="the operator's hand for all_clear and not_clear, which only its thumb "
         "tells apart: a window that does not see it commands neither ('off': no check)",
