@@ -5,6 +5,7 @@ engine's own code (`proxima.engine`), so a figure cannot drift from what the eng
 - `metrics`: a checkpoint on a split's test windows (accuracy, macro F1, per class,
   per clip, per view).
 - `protocols`: train and score once per evaluation protocol (the model card's table).
+- `model_card`: a checkpoint's Markdown card from its metadata and protocol results.
 - `stitch`: long replay streams stitched from dataset clips, with a ground-truth script.
 - `scoring`: a run's commands against that ground truth (hits, misses, wrong, latency).
 - `replay`: stitched streams through the real `Engine`, and the fast offline replay
@@ -15,5 +16,5 @@ engine's own code (`proxima.engine`), so a figure cannot drift from what the eng
 - `temporal_errors`: where a temporal-split model goes wrong, against a nearest-
   neighbour check.
 - `plots`: the pictures of the above.
-- `cli`: `proxima evaluate`, `proxima protocols` and `proxima stitch`.
+- `cli`: `proxima evaluate`, `proxima protocols`, `proxima model-card` and `proxima stitch`.
 """
