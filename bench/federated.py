@@ -70,8 +70,9 @@ def load() -> float:
 
 
 def centralised(checkpoint: Path | None, test_stride: int, mirror: bool) -> dict[str, Any]:
+    from proxima.evaluation.metrics import evaluate_checkpoint
     from proxima.gesture.train import TrainConfig
-    from proxima.gesture.workflow import evaluate_checkpoint, train_model
+    from proxima.gesture.workflow import train_model
 
     out: dict[str, Any] = {"load_average_at_start": load()}
     if checkpoint is None:

@@ -29,3 +29,19 @@ def laser_clips(laser_dir: Path):
     from proxima.gesture.laser import load_laser_dir
 
     return load_laser_dir(laser_dir)
+
+
+@pytest.fixture(scope="session")
+def small_checkpoint(tmp_path_factory, laser_dir: Path) -> Path:
+    """A TCN trained briefly by the real CLI on the temporal split (coarse windows)."""
+    from typer.testing import CliRunner
+
+    from proxima.cli import app
+
+    out = tmp_path_factory.mktemp("ckpt") / "tcn.pt"
+    result = CliRunner().invoke(
+        app, ["train", "--data", str(laser_dir), "--model", "tcn", "--split", "temporal",
+              "--out", str(out), "--epochs", "4", "--stride", "12", "--threads", "1"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    return out

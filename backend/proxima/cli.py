@@ -1,6 +1,6 @@
-"""The `proxima` command. Each subsystem registers its own subcommands from a small
-`commands.py` that imports heavy libraries (torch, mediapipe, flwr) only inside the
-command bodies, so `proxima --help` stays fast."""
+"""The `proxima` command. Each subsystem registers its own subcommands from a small CLI
+module (`cli.py`; some are still named `commands.py`) that imports heavy libraries
+(torch, mediapipe, flwr) only inside the command bodies, so `proxima --help` stays fast."""
 
 from __future__ import annotations
 
@@ -19,9 +19,12 @@ def _register_all() -> None:
     from proxima.gesture import commands as gesture_commands
 
     gesture_commands.register(app)
-    from proxima.engine import commands as engine_commands
+    from proxima.evaluation import cli as evaluation_cli
 
-    engine_commands.register(app)
+    evaluation_cli.register(app)
+    from proxima.engine import cli as engine_cli
+
+    engine_cli.register(app)
     from proxima.drone import commands as drone_commands
 
     drone_commands.register(app)

@@ -11,7 +11,7 @@ import pytest
 
 from proxima.control import ControlSettings
 from proxima.engine import Engine, JsonlWriter, StreamSpec
-from proxima.engine.stitch import Blank, stitch_views
+from proxima.evaluation.stitch import Blank, stitch_views
 from proxima.events import EventBus
 
 # The paper's flight: hover (not armed: ignored), arm, move left; the main drone's camera

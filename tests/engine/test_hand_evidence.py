@@ -8,7 +8,7 @@ from pathlib import Path
 
 from proxima.control import ControlSettings
 from proxima.engine import Engine, StreamSpec
-from proxima.engine.stitch import stitch_views
+from proxima.evaluation.stitch import stitch_views
 from proxima.events import EventBus
 
 PLAN = [("have_command", 5.0), ("all_clear", 6.0), ("have_command", 4.0), ("not_clear", 6.0)]

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from proxima.engine.stitch import stitch_views
+from proxima.evaluation.stitch import stitch_views
 
 # move_ahead and move_upward are performed while disarmed and must give no command.
 SCRIPT = [

@@ -1,7 +1,7 @@
 """The live recognition engine: per-stream pipelines (source -> pose -> window ->
 classifier -> filter), a time-ordered merge into the decision path (arbiter, debounce,
-arming), typed events on an `EventBus`, a JSONL event writer, and the stitching tool
-that builds replay streams with a ground-truth script for tests and benchmarks.
+arming), typed events on an `EventBus` and a JSONL event writer. Stitched replay streams
+and their scoring are `proxima.evaluation`.
 
 Public API: `Engine`, `StreamSpec`, `EngineSettings`, `StreamPipeline`,
 `TimeOrderedMerge`, `JsonlWriter`, `PoseWindow`.

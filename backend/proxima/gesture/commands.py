@@ -1,8 +1,7 @@
-"""`proxima train`, `proxima evaluate`, `proxima protocols` and `proxima data fetch`."""
+"""`proxima train` and `proxima data fetch` (scoring a model is `proxima.evaluation.cli`)."""
 
 from __future__ import annotations
 
-import json
 import math
 import shlex
 import sys
@@ -117,107 +116,6 @@ def train(
     )
 
 
-def evaluate(
-    checkpoint: Annotated[Path, typer.Option(help="Checkpoint from `proxima train`.")],
-    json_out: Annotated[Path, typer.Option("--json", help="Where to write the metrics JSON.")],
-    data: DataOpt = None,
-    split: SplitOpt = "temporal",
-    stride: Annotated[int, typer.Option(help="Frames between test windows.")] = 3,
-) -> None:
-    """Score a checkpoint on a split's test part: a metrics JSON and a confusion PNG."""
-    from proxima.gesture.clip import DataError
-    from proxima.gesture.evaluate import plot_confusion
-    from proxima.gesture.workflow import evaluate_checkpoint
-
-    try:
-        result = evaluate_checkpoint(checkpoint, data, split, stride)
-    except (DataError, ValueError, FileNotFoundError) as exc:
-        _fail(exc)
-    json_out.parent.mkdir(parents=True, exist_ok=True)
-    json_out.write_text(json.dumps(result, indent=1))
-    png = plot_confusion(
-        result["confusion"], json_out.with_suffix(".png"),
-        f"{checkpoint.name} on {split}: accuracy {result['accuracy']:.3f}",
-    )  # fmt: skip
-    views = ", ".join(f"{v} {r['accuracy']:.3f}" for v, r in result["per_view"].items())
-    typer.echo(
-        f"{split}: accuracy {result['accuracy']:.3f} (per view: {views}), macro F1 "
-        f"{result['macro_f1']:.3f}, clip accuracy {result['clip_accuracy']:.3f} "
-        f"({result['windows']} windows, {result['clips']} clips) -> {json_out}, {png}"
-    )
-
-
-def protocols(
-    json_out: Annotated[Path, typer.Option("--json", help="Where to write the results.")],
-    data: DataOpt = None,
-    split: Annotated[
-        list[str] | None, typer.Option("--split", help="Repeatable; default: all protocols.")
-    ] = None,
-    eval_data: Annotated[
-        list[str] | None,
-        typer.Option(help="Score temporal/cross-view on this data only (e.g. laser)."),
-    ] = None,
-    model: str = "tcn",
-    epochs: int = 60,
-    stride: int = 4,
-    seed: int = 0,
-    threads: int = 2,
-    time_warp: Annotated[float | None, typer.Option(help="As for train.")] = None,
-    transitions: Annotated[float, typer.Option(help="As for train.")] = 0.0,
-    mirror: Annotated[bool, typer.Option(help="As for train.")] = True,
-    refit: Annotated[bool, typer.Option(help="As for train.")] = False,
-) -> None:
-    """Train and score a model on each evaluation protocol; print the results table."""
-    from rich.progress import Progress
-
-    from proxima.gesture.protocols import (
-        LASER_PROTOCOLS,
-        UAV_PROTOCOLS,
-        results_table,
-        run_protocols,
-        save_results,
-    )
-    from proxima.gesture.train import TrainConfig
-
-    splits = split or [*LASER_PROTOCOLS, *UAV_PROTOCOLS]
-    cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads,
-                      transitions=transitions, mirror=mirror, refit=refit)  # fmt: skip
-    if time_warp is not None:
-        cfg.time_warp = time_warp
-    rows_so_far: list[dict] = []
-    with Progress() as progress:
-        task = progress.add_task("protocols", total=len(splits))
-
-        def done(row: dict) -> None:
-            rows_so_far.append(row)
-            save_results(rows_so_far, json_out)  # keep finished rows if a later one fails
-            progress.console.print(
-                f"{row['split']}: accuracy {row['accuracy']:.3f}, clip {row['clip_accuracy']:.3f}"
-            )
-            progress.advance(task)
-
-        rows = run_protocols(splits, model, data, cfg, eval_data, done)
-    save_results(rows, json_out)
-    typer.echo(results_table(rows))
-
-
-def model_card(
-    checkpoint: Annotated[Path, typer.Option(help="The checkpoint to describe.")],
-    out: Annotated[Path, typer.Option(help="Markdown file to write.")],
-    results: Annotated[
-        list[Path] | None, typer.Option(help="Protocol results JSON (repeatable).")
-    ] = None,
-    notes: Annotated[Path | None, typer.Option(help="Markdown to append.")] = None,
-) -> None:
-    """Write a model card (Markdown) for a checkpoint from its metadata and results."""
-    from proxima.gesture.model_card import render_model_card
-
-    rows = [row for f in results or [] for row in json.loads(f.read_text())]
-    text = render_model_card(checkpoint, rows, notes.read_text() if notes else "")
-    out.write_text(text)
-    typer.echo(f"wrote {out}")
-
-
 def fetch(
     name: Annotated[str, typer.Argument(help="laser or uav-gesture")] = "laser",
     dest: Annotated[Path | None, typer.Option(help="Folder (default: the user cache).")] = None,
@@ -237,9 +135,6 @@ def fetch(
 
 def register(app: typer.Typer) -> None:
     app.command()(train)
-    app.command()(evaluate)
-    app.command()(protocols)
-    app.command("model-card")(model_card)
     data_app = typer.Typer(help="Data sets: fetch them for offline use.", no_args_is_help=True)
     data_app.command()(fetch)
     app.add_typer(data_app, name="data")

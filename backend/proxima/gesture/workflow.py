@@ -1,5 +1,5 @@
-"""End-to-end train and evaluate, as the CLI runs them: data -> split -> windows ->
-pipeline -> model -> checkpoint; checkpoint -> test windows -> metrics."""
+"""End-to-end training, as the CLI runs it: data -> split -> windows -> pipeline ->
+model -> checkpoint. Scoring a checkpoint is `proxima.evaluation.metrics`."""
 
 from __future__ import annotations
 
@@ -7,15 +7,12 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
-import numpy as np
 import torch
 
-from proxima.gesture.classifier import GestureClassifier, save_checkpoint
+from proxima.gesture.classifier import save_checkpoint
 from proxima.gesture.clip import Clip
 from proxima.gesture.datasets import load_data
-from proxima.gesture.evaluate import accuracy_by, metrics
 from proxima.gesture.features import make_pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
@@ -23,10 +20,8 @@ from proxima.gesture.train import (
     EpochLog,
     TrainConfig,
     chosen_schedule,
-    features,
     fit,
     fit_schedule,
-    predict_proba,
 )
 from proxima.gesture.windows import WINDOW, Windows, make_windows, split_clips, validation_parts
 
@@ -110,27 +105,3 @@ def train_model(
     path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta)
     return TrainResult(path, history, len(fit_w), len(val_w), fit_w.skipped + val_w.skipped,
                        time.perf_counter() - t0, refit_history)  # fmt: skip
-
-
-def evaluate_checkpoint(
-    checkpoint: str | Path | None,
-    data_specs: Sequence[str] | None,
-    split: str,
-    stride: int = 3,
-    max_gap: int = 5,
-) -> dict[str, Any]:
-    """Metrics of a checkpoint on a split's test windows (see evaluate.metrics)."""
-    clf = GestureClassifier.load(checkpoint)
-    data = load_data(data_specs)
-    parts = split_clips(data.clips, split, clf.window, data.uav_dir)
-    test = parts.test if parts.test else parts.train  # `all`: the training data itself
-    w = make_windows(test, clf.window, stride, max_gap)
-    probs = predict_proba(clf.model, features(clf.pipeline, w))
-    result = metrics(w.labels, probs, w.clip)
-    # The LASER side views are where the model is weakest: report each view on its own.
-    view_of = {c.name: c.view for c in test}
-    views = np.array([view_of[w.clip_names[c]] for c in w.clip])
-    result.update(split=split, checkpoint=str(checkpoint), skipped_windows=w.skipped,
-                  model=clf.model_name,
-                  per_view=accuracy_by(views, w.labels, probs.argmax(axis=1)))  # fmt: skip
-    return result

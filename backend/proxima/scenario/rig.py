@@ -89,7 +89,7 @@ def choose_takes(
         ScenarioError: the plan cannot be stitched, or no seed (or not the given seed)
             meets the condition.
     """
-    from proxima.engine.stitch import StitchError, stitch_views
+    from proxima.evaluation.stitch import StitchError, stitch_views
 
     checked = list(full_views) if full_views is not None else list(views)
     seeds = [seed] if seed is not None else list(range(tries if require_full else 1))

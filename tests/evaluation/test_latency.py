@@ -1,33 +1,38 @@
-"""The latency benchmark (bench/command_latency.py) on real stitched streams: the tuning's
-selection rule puts correct commands first, then fast ones; its offline replay decides as
-the engine does; the stages from onset to command come in order."""
+"""The latency benchmark (proxima.evaluation.latency) on real stitched streams: the
+tuning's selection rule puts correct commands first, then fast ones; the stages from
+onset to command come in order and end at the scored latency."""
 
 from pathlib import Path
 
 import pytest
 
-from bench.command_latency import (
+from proxima.control import ControlSettings
+from proxima.engine.config import EngineSettings
+from proxima.evaluation.latency import (
+    LatencyConfig,
     build_streams,
-    cached_probs,
-    engine_run,
+    measure,
     onset_stages,
     rank,
-    simulate,
     stage_figures,
     tune,
 )
-from proxima.control import ControlSettings
-from proxima.engine.config import EngineSettings
-from proxima.engine.stitch import Blank, apply_blank
+from proxima.evaluation.replay import decide, recognize
 from proxima.gesture.classifier import GestureClassifier
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
 
 
-def test_tuning_picks_the_fastest_setting_under_one_wrong_command_per_hour(laser_clips) -> None:
-    clf = GestureClassifier.load(SHIPPED)
+@pytest.fixture(scope="module")
+def shipped() -> GestureClassifier:
+    return GestureClassifier.load(SHIPPED)
+
+
+def test_tuning_picks_the_fastest_setting_under_one_wrong_command_per_hour(
+    laser_clips, shipped
+) -> None:
     streams = build_streams(laser_clips, [0], 12, "test", 3.0, 4.0)
-    best, rows = tune(streams, clf, ControlSettings(), 0.25, lambda msg: None)
+    best, rows = tune(streams, shipped, ControlSettings(), EngineSettings(), lambda msg: None)
     assert rows[0] is best and len(rows) > 200  # grid, land confirmations, release times
     allowed = [r for r in rows if r["wrong_or_spurious_per_hour"] < 1.0]
     if allowed:
@@ -44,13 +49,11 @@ def test_tuning_picks_the_fastest_setting_under_one_wrong_command_per_hour(laser
 
 
 def test_the_stages_of_a_command_come_in_order_and_end_at_the_scored_latency(
-    laser_clips,
+    laser_clips, shipped
 ) -> None:
-    clf = GestureClassifier.load(SHIPPED)
     (stream,) = build_streams(laser_clips, [3], 12, "test", 3.0, 4.0)
     control = ControlSettings()
-    k, probs, sight = cached_probs(clf, stream, [5], 0.25)
-    run = simulate(stream, k, probs, sight, 5, control, clf.labels)
+    run = decide(recognize(stream, shipped, EngineSettings(stride=5), control), control)
     rows = onset_stages(stream, run, control.filter_size)
     assert [r["gesture"] for r in rows] == [s.gesture for s in stream.segments]
     done = [r for r in rows if r["commanded_s"] is not None]
@@ -69,30 +72,16 @@ def test_the_stages_of_a_command_come_in_order_and_end_at_the_scored_latency(
     assert figures["named"]["median_s"] <= figures["commanded"]["median_s"]
 
 
-def test_the_offline_replay_decides_as_the_engine_when_the_operator_is_lost(
-    laser_clips, tmp_path: Path
+def test_the_benchmark_scores_the_engine_and_checks_the_offline_replay_against_it(
+    laser_clips, shipped
 ) -> None:
-    """The tuning's offline replay against the real engine on one stream where the
-    operator is unseen for 1.5 s (every landmark invisible) and then gone for 2 s (no
-    frames at all): the same commands (the operator-lost hovers included) and the same
-    arming changes."""
-    clf = GestureClassifier.load(SHIPPED)
-    (stream,) = build_streams(laser_clips, [5], 10, "test", 3.0, 4.0)
-    t = (stream.frames - 1) / stream.fps
-    stream.visibility[(t >= 12.0) & (t < 13.5)] = 0.0
-    apply_blank(stream, Blank(24.0, 26.0, "drop"))
-    control = ControlSettings()
-    k, probs, sight = cached_probs(clf, stream, [5], 0.25)
-    offline = simulate(stream, k, probs, sight, 5, control, clf.labels)
-    path = tmp_path / "stream.csv"
-    stream.write(path)
-    engine = engine_run(path, control, EngineSettings(), clf)
-
-    def rounded(commands: list[dict]) -> list[tuple]:
-        return [(round(c["t"], 3), c["command"], c["stream"]) for c in commands]
-
-    assert rounded(offline.commands) == rounded(engine.commands)
-    assert [(round(t, 3), a) for t, a in offline.arming] == [
-        (round(t, 3), a) for t, a in engine.arming
-    ]
-    assert sum(c["stream"] == "" for c in engine.commands) >= 2  # the losses hovered
+    """Two evaluation streams (views f and l) through the engine, with the default
+    settings: the offline replay on the same streams gives the same figures."""
+    report = measure(shipped, laser_clips, LatencyConfig(streams=2, segments=8))
+    result = report.result
+    assert result["offline_check"]["same_as_engine"] is True
+    assert result["streams"]["count"] == 2 and result["streams"]["events_published"] > 0
+    assert result["result"]["expected_commands"] > 0
+    assert len(report.latencies) == result["result"]["hits"] + result["result"]["late_hits"]
+    assert {r["view"] for r in report.stages} == {"f", "l"}
+    assert "tuning" not in result and "cautious_profile" not in result

@@ -1,5 +1,5 @@
 """An armed operator standing still, through the real engine with the shipped model
-(bench/still_operator.py): relaxed arms command nothing; the static signals' stances
+(proxima.evaluation.still): relaxed arms command nothing; the static signals' stances
 (hands crossed low in front, arms held out) are read as those signals."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.still_operator import back_and_forth, run, still_prefix
+from proxima.evaluation.still import back_and_forth, still_operator, still_prefix
 from proxima.gesture.data_source import resolve_dataset
 from proxima.gesture.laser import load_laser_dir
 
@@ -37,7 +37,7 @@ def clips() -> list:
 
 @pytest.fixture(scope="module")
 def stances(clips) -> dict[str, dict]:
-    result = run(SHIPPED, clips)
+    result = still_operator(SHIPPED, clips)
     return {s["clip"]: s for s in result["stances"]}
 
 

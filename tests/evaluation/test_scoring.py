@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from proxima.engine.scoring import latency_figures, score_commands
+from proxima.evaluation.scoring import latency_figures, score_commands
 
 SEGMENTS = [
     {"gesture": "have_command", "onset_t": 0.0},

@@ -1,5 +1,4 @@
-"""`proxima recognize` (run one stream, write every event as JSON lines) and
-`proxima stitch` (build replay streams from dataset clips, with a ground-truth script)."""
+"""`proxima recognize`: run one stream, write every event as JSON lines."""
 
 from __future__ import annotations
 
@@ -12,7 +11,6 @@ import typer
 def register(app: typer.Typer) -> None:
     """Add the engine's commands to the `proxima` app."""
     app.command("recognize")(recognize)
-    app.command("stitch")(stitch)
 
 
 def recognize(
@@ -110,74 +108,3 @@ def recognize(
         raise typer.Exit(1)
     if interrupted:
         raise typer.Exit(130)
-
-
-def stitch(
-    out: Annotated[Path, typer.Option(help="CSV to write (one per view: OUT.<view>.csv)")],
-    script: Annotated[
-        str, typer.Option(help="GESTURE:SECONDS,... e.g. have_command:5,move_to_left:6")
-    ] = "",
-    random_segments: Annotated[
-        int, typer.Option("--random", help="instead of --script: N random gestures")
-    ] = 0,
-    min_s: Annotated[float, typer.Option(help="shortest random segment (s)")] = 3.0,
-    max_s: Annotated[float, typer.Option(help="longest random segment (s)")] = 6.0,
-    view: Annotated[list[str] | None, typer.Option(help="camera view f, l or r (repeat)")] = None,
-    part: Annotated[
-        str, typer.Option(help="test (temporal split's last 30%), train or all")
-    ] = "test",
-    transition_s: Annotated[float, typer.Option(help="seconds between two gestures")] = 0.5,
-    fps: Annotated[float, typer.Option(help="frame rate of the stream")] = 30.0,
-    blank: Annotated[
-        list[str] | None,
-        typer.Option(help="VIEW:KIND:START:END, KIND feet or drop (repeat), e.g. f:feet:20:35"),
-    ] = None,
-    seed: Annotated[int, typer.Option(help="random seed (segment offsets, random script)")] = 0,
-    data: Annotated[str | None, typer.Option(help="LASER data folder")] = None,
-) -> None:
-    """Stitch LASER clips into a replay stream (landmark CSV) performing a gesture script,
-    with smooth transitions, and write its ground truth beside it (OUT.truth.json)."""
-    import numpy as np
-    from rich.console import Console
-
-    from proxima.engine.stitch import (
-        StitchError,
-        parse_blank,
-        parse_plan,
-        random_plan,
-        stitch_views,
-    )
-    from proxima.gesture.clip import DataError
-    from proxima.gesture.data_source import resolve_dataset
-    from proxima.gesture.laser import load_laser_dir
-
-    console = Console(stderr=True, soft_wrap=True)
-    views = view or ["f"]
-    try:
-        if bool(script) == bool(random_segments):
-            raise StitchError("give exactly one of --script and --random")
-        plan = (
-            parse_plan(script)
-            if script
-            else random_plan(np.random.default_rng(seed), random_segments, min_s, max_s)
-        )
-        blanks: dict[str, list] = {}
-        for spec in blank or []:
-            v, sep, rest = spec.partition(":")
-            kind, sep2, times = rest.partition(":")
-            if not (sep and sep2) or v not in views:
-                raise StitchError(f"blank {spec!r}: expected VIEW:KIND:START:END, VIEW in {views}")
-            blanks.setdefault(v, []).append(parse_blank(times, kind))
-        with console.status("loading clips"):
-            clips = load_laser_dir(resolve_dataset(data))
-        streams = stitch_views(clips, plan, views, part, transition_s, fps, blanks, seed)
-    except (StitchError, DataError) as exc:
-        console.print(f"[red]error:[/red] {exc}")
-        raise typer.Exit(2) from None
-    for v, stream in streams.items():
-        path = out if len(views) == 1 else out.with_name(f"{out.stem}.{v}{out.suffix}")
-        truth = stream.write(path)
-        console.print(
-            f"{path}: view {v}, {len(stream.segments)} gestures, {stream.duration_s:.1f} s, "
-            f"{len(stream.frames)} frames; truth {truth}"
-        )

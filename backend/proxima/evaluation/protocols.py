@@ -10,8 +10,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from proxima.evaluation.metrics import evaluate_checkpoint
 from proxima.gesture.train import TrainConfig
-from proxima.gesture.workflow import evaluate_checkpoint, train_model
+from proxima.gesture.workflow import train_model
 
 LASER_PROTOCOLS = ("temporal", "cross-view:f", "cross-view:l", "cross-view:r")
 UAV_PROTOCOLS = ("uav-gesture:1", "uav-gesture:2", "uav-gesture:3")
@@ -67,5 +68,6 @@ def results_table(rows: Sequence[dict[str, Any]]) -> str:
 
 
 def save_results(rows: Sequence[dict[str, Any]], path: Path) -> None:
+    """Write protocol results as a JSON list (the model card reads them back)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(list(rows), indent=1))

@@ -1,15 +1,16 @@
-"""The temporal-split error analysis (bench/temporal_errors.py): its accuracy is the one
-`proxima evaluate` reports for the same checkpoint, and its wrong stretches are exact."""
+"""The temporal-split error analysis (proxima.evaluation.temporal_errors): its accuracy is
+the one `proxima evaluate` reports for the same checkpoint, and its wrong stretches are
+exact."""
 
-import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
 
-from bench.temporal_errors import analyse, main, nearest_labels, stretches
-from proxima.gesture.workflow import evaluate_checkpoint
+from proxima.evaluation.metrics import evaluate_checkpoint
+from proxima.evaluation.plots import plot_temporal_errors
+from proxima.evaluation.temporal_errors import analyse, nearest_labels, stretches
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
 
@@ -33,11 +34,9 @@ def test_nearest_labels_finds_the_closest_row() -> None:
 
 
 def test_analysis_agrees_with_evaluate(small_checkpoint: Path, laser_dir: Path, tmp_path) -> None:
-    out = tmp_path / "errors.json"
-    main(["--checkpoint", str(small_checkpoint), "--checkpoint", str(SHIPPED),
-          "--data", str(laser_dir), "--out", str(out)])  # fmt: skip
-    result = json.loads(out.read_text())
-    assert out.with_suffix(".png").stat().st_size > 10_000
+    result = analyse([small_checkpoint, SHIPPED], str(laser_dir))
+    plot_temporal_errors(result, tmp_path / "errors.png")
+    assert (tmp_path / "errors.png").stat().st_size > 10_000
     evaluated = evaluate_checkpoint(small_checkpoint, [str(laser_dir)], "temporal")
     assert result["test_windows"] == evaluated["windows"]
     small, shipped = result["models"]

@@ -8,8 +8,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from proxima.evaluation.protocols import results_table
 from proxima.gesture.classifier import GestureClassifier
-from proxima.gesture.protocols import results_table
 
 
 def render_model_card(

@@ -20,7 +20,7 @@ frames (nobody detected).
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -178,7 +178,7 @@ def stitch_views(
     part: str = "test",
     transition_s: float = 0.5,
     fps: float = 30.0,
-    blanks: dict[str, Sequence[Blank]] | None = None,
+    blanks: Mapping[str, Sequence[Blank]] | None = None,
     seed: int = 0,
     window: int = 60,
 ) -> dict[str, StitchedStream]:
@@ -272,7 +272,7 @@ def apply_blank(stream: StitchedStream, blank: Blank) -> None:
     t = (stream.frames - 1) / stream.fps
     inside = (t >= blank.start_t) & (t < blank.end_t)
     if blank.kind == "feet":
-        stream.visibility[np.ix_(inside, list(FEET))] = 0.0
+        stream.visibility[np.ix_(inside, np.asarray(FEET))] = 0.0
     else:
         keep = ~inside
         stream.frames = stream.frames[keep]

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from proxima.engine.stitch import (
+from proxima.evaluation.stitch import (
     Blank,
     StitchError,
     parse_blank,

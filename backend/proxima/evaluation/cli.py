@@ -1,0 +1,199 @@
+"""`proxima evaluate` (a checkpoint on a split's test windows), `proxima protocols`
+(train and score once per protocol), `proxima model-card` and `proxima stitch` (replay
+streams from dataset clips, with a ground-truth script)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, NoReturn
+
+import typer
+
+from proxima.gesture.commands import DataOpt, SplitOpt
+
+
+def register(app: typer.Typer) -> None:
+    """Add the evaluation's commands to the `proxima` app."""
+    app.command()(evaluate)
+    app.command()(protocols)
+    app.command("model-card")(model_card)
+    app.command("stitch")(stitch)
+
+
+def _fail(exc: Exception) -> NoReturn:
+    typer.secho(f"error: {exc}", fg="red", err=True)
+    raise typer.Exit(2)
+
+
+def evaluate(
+    checkpoint: Annotated[Path, typer.Option(help="Checkpoint from `proxima train`.")],
+    json_out: Annotated[Path, typer.Option("--json", help="Where to write the metrics JSON.")],
+    data: DataOpt = None,
+    split: SplitOpt = "temporal",
+    stride: Annotated[int, typer.Option(help="Frames between test windows.")] = 3,
+) -> None:
+    """Score a checkpoint on a split's test part: a metrics JSON and a confusion PNG."""
+    from proxima.evaluation.metrics import evaluate_checkpoint
+    from proxima.evaluation.plots import plot_confusion
+    from proxima.gesture.clip import DataError
+
+    try:
+        result = evaluate_checkpoint(checkpoint, data, split, stride)
+    except (DataError, ValueError, FileNotFoundError) as exc:
+        _fail(exc)
+    json_out.parent.mkdir(parents=True, exist_ok=True)
+    json_out.write_text(json.dumps(result, indent=1))
+    png = plot_confusion(
+        result["confusion"], json_out.with_suffix(".png"),
+        f"{checkpoint.name} on {split}: accuracy {result['accuracy']:.3f}",
+    )  # fmt: skip
+    views = ", ".join(f"{v} {r['accuracy']:.3f}" for v, r in result["per_view"].items())
+    typer.echo(
+        f"{split}: accuracy {result['accuracy']:.3f} (per view: {views}), macro F1 "
+        f"{result['macro_f1']:.3f}, clip accuracy {result['clip_accuracy']:.3f} "
+        f"({result['windows']} windows, {result['clips']} clips) -> {json_out}, {png}"
+    )
+
+
+def protocols(
+    json_out: Annotated[Path, typer.Option("--json", help="Where to write the results.")],
+    data: DataOpt = None,
+    split: Annotated[
+        list[str] | None, typer.Option("--split", help="Repeatable; default: all protocols.")
+    ] = None,
+    eval_data: Annotated[
+        list[str] | None,
+        typer.Option(help="Score temporal/cross-view on this data only (e.g. laser)."),
+    ] = None,
+    model: str = "tcn",
+    epochs: int = 60,
+    stride: int = 4,
+    seed: int = 0,
+    threads: int = 2,
+    time_warp: Annotated[float | None, typer.Option(help="As for train.")] = None,
+    transitions: Annotated[float, typer.Option(help="As for train.")] = 0.0,
+    mirror: Annotated[bool, typer.Option(help="As for train.")] = True,
+    refit: Annotated[bool, typer.Option(help="As for train.")] = False,
+) -> None:
+    """Train and score a model on each evaluation protocol; print the results table."""
+    from rich.progress import Progress
+
+    from proxima.evaluation.protocols import (
+        LASER_PROTOCOLS,
+        UAV_PROTOCOLS,
+        results_table,
+        run_protocols,
+        save_results,
+    )
+    from proxima.gesture.train import TrainConfig
+
+    splits = split or [*LASER_PROTOCOLS, *UAV_PROTOCOLS]
+    cfg = TrainConfig(epochs=epochs, stride=stride, seed=seed, threads=threads,
+                      transitions=transitions, mirror=mirror, refit=refit)  # fmt: skip
+    if time_warp is not None:
+        cfg.time_warp = time_warp
+    rows_so_far: list[dict] = []
+    with Progress() as progress:
+        task = progress.add_task("protocols", total=len(splits))
+
+        def done(row: dict) -> None:
+            rows_so_far.append(row)
+            save_results(rows_so_far, json_out)  # keep finished rows if a later one fails
+            progress.console.print(
+                f"{row['split']}: accuracy {row['accuracy']:.3f}, clip {row['clip_accuracy']:.3f}"
+            )
+            progress.advance(task)
+
+        rows = run_protocols(splits, model, data, cfg, eval_data, done)
+    save_results(rows, json_out)
+    typer.echo(results_table(rows))
+
+
+def model_card(
+    checkpoint: Annotated[Path, typer.Option(help="The checkpoint to describe.")],
+    out: Annotated[Path, typer.Option(help="Markdown file to write.")],
+    results: Annotated[
+        list[Path] | None, typer.Option(help="Protocol results JSON (repeatable).")
+    ] = None,
+    notes: Annotated[Path | None, typer.Option(help="Markdown to append.")] = None,
+) -> None:
+    """Write a model card (Markdown) for a checkpoint from its metadata and results."""
+    from proxima.evaluation.model_card import render_model_card
+
+    rows = [row for f in results or [] for row in json.loads(f.read_text())]
+    text = render_model_card(checkpoint, rows, notes.read_text() if notes else "")
+    out.write_text(text)
+    typer.echo(f"wrote {out}")
+
+
+def stitch(
+    out: Annotated[Path, typer.Option(help="CSV to write (one per view: OUT.<view>.csv)")],
+    script: Annotated[
+        str, typer.Option(help="GESTURE:SECONDS,... e.g. have_command:5,move_to_left:6")
+    ] = "",
+    random_segments: Annotated[
+        int, typer.Option("--random", help="instead of --script: N random gestures")
+    ] = 0,
+    min_s: Annotated[float, typer.Option(help="shortest random segment (s)")] = 3.0,
+    max_s: Annotated[float, typer.Option(help="longest random segment (s)")] = 6.0,
+    view: Annotated[list[str] | None, typer.Option(help="camera view f, l or r (repeat)")] = None,
+    part: Annotated[
+        str, typer.Option(help="test (temporal split's last 30%), train or all")
+    ] = "test",
+    transition_s: Annotated[float, typer.Option(help="seconds between two gestures")] = 0.5,
+    fps: Annotated[float, typer.Option(help="frame rate of the stream")] = 30.0,
+    blank: Annotated[
+        list[str] | None,
+        typer.Option(help="VIEW:KIND:START:END, KIND feet or drop (repeat), e.g. f:feet:20:35"),
+    ] = None,
+    seed: Annotated[int, typer.Option(help="random seed (segment offsets, random script)")] = 0,
+    data: Annotated[str | None, typer.Option(help="LASER data folder")] = None,
+) -> None:
+    """Stitch LASER clips into a replay stream (landmark CSV) performing a gesture script,
+    with smooth transitions, and write its ground truth beside it (OUT.truth.json)."""
+    import numpy as np
+    from rich.console import Console
+
+    from proxima.evaluation.stitch import (
+        Blank,
+        StitchError,
+        parse_blank,
+        parse_plan,
+        random_plan,
+        stitch_views,
+    )
+    from proxima.gesture.clip import DataError
+    from proxima.gesture.data_source import resolve_dataset
+    from proxima.gesture.laser import load_laser_dir
+
+    console = Console(stderr=True, soft_wrap=True)
+    views = view or ["f"]
+    try:
+        if bool(script) == bool(random_segments):
+            raise StitchError("give exactly one of --script and --random")
+        plan = (
+            parse_plan(script)
+            if script
+            else random_plan(np.random.default_rng(seed), random_segments, min_s, max_s)
+        )
+        blanks: dict[str, list[Blank]] = {}
+        for spec in blank or []:
+            v, sep, rest = spec.partition(":")
+            kind, sep2, times = rest.partition(":")
+            if not (sep and sep2) or v not in views:
+                raise StitchError(f"blank {spec!r}: expected VIEW:KIND:START:END, VIEW in {views}")
+            blanks.setdefault(v, []).append(parse_blank(times, kind))
+        with console.status("loading clips"):
+            clips = load_laser_dir(resolve_dataset(data))
+        streams = stitch_views(clips, plan, views, part, transition_s, fps, blanks, seed)
+    except (StitchError, DataError) as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(2) from None
+    for v, stream in streams.items():
+        path = out if len(views) == 1 else out.with_name(f"{out.stem}.{v}{out.suffix}")
+        truth = stream.write(path)
+        console.print(
+            f"{path}: view {v}, {len(stream.segments)} gestures, {stream.duration_s:.1f} s, "
+            f"{len(stream.frames)} frames; truth {truth}"
+        )
