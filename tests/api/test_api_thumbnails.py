@@ -80,7 +80,7 @@ def test_camera_stream_thumbnails_from_the_live_engine(tmp_path, checkpoint_path
                 "priority": 1,
             },
         ],
-        recognition={"checkpoint": str(checkpoint_path)},
+        engine={"checkpoint": str(checkpoint_path)},
         server={"db_path": str(tmp_path / "c.db"), "thumbnail_hz": 4.0},
     )
     bus = EventBus()
