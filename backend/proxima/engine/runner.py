@@ -88,11 +88,10 @@ class Engine:
     ) -> None:
         if not streams:
             raise ValueError("the engine needs at least one stream")
-        names = [s.name for s in streams]
-        if len(set(names)) != len(names):
-            raise ValueError(f"stream names must be unique: {names}")
         self.specs = sorted(streams, key=lambda s: s.priority)  # stable: ties keep order
         names = [s.name for s in self.specs]
+        if len(set(names)) != len(names):
+            raise ValueError(f"stream names must be unique: {names}")
         self.bus = bus
         self.control = control or ControlSettings()
         self.settings = settings or EngineSettings()
