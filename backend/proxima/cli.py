@@ -28,9 +28,9 @@ def _register_all() -> None:
     from proxima.drone import commands as drone_commands
 
     drone_commands.register(app)
-    from proxima.api import commands as api_commands
+    from proxima.api import cli as api_cli
 
-    api_commands.register(app)
+    api_cli.register(app)
     from proxima.federated import commands as federated_commands
 
     federated_commands.register(app)

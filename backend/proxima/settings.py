@@ -5,6 +5,12 @@ fields with a double underscore: `PROXIMA_SERVER__PORT=8100`, lists as JSON:
 `PROXIMA_STREAMS='[{"name": "front", ...}]'`), a TOML file (`--config PATH`, else
 `PROXIMA_CONFIG`, else `./proxima.toml` when present), then the defaults below.
 
+Each section is the subsystem's own model, not a copy: `[[streams]]` are
+`proxima.engine.StreamSpec`, `[engine]` is `proxima.engine.EngineSettings`, `[recognition]`
+is `proxima.control.ControlSettings`, `[safety]` is `proxima.drone.safety.SafetyConfig`.
+Keys that were renamed still work for now: `DEPRECATED_KEYS` moves them to their new place
+with a `DeprecationWarning` and a log line naming both.
+
 Secrets have no default: the first supervisor comes from `PROXIMA_ADMIN_USER` /
 `PROXIMA_ADMIN_PASSWORD` or gets a one-time password printed at first start, and a
 well-known or short password is refused.
@@ -12,8 +18,10 @@ well-known or short password is refused.
 
 from __future__ import annotations
 
+import logging
 import os
 import tomllib
+import warnings
 from contextvars import ContextVar
 from pathlib import Path
 from typing import Any, Literal
@@ -25,9 +33,11 @@ from pydantic_settings import (
     SettingsConfigDict,
 )
 
-from proxima.control.config import ConfirmByCommand, ThresholdByCommand, ThumbHand
+from proxima.control.config import ControlSettings
+from proxima.drone.safety import SafetyConfig
+from proxima.engine.config import EngineSettings, StreamSpec
 
-URI_SCHEMES = ("webcam:", "file:", "rtsp://", "rtsps://", "replay:")
+log = logging.getLogger(__name__)
 
 # Passwords anyone would try first; refused even when long enough.
 WELL_KNOWN_PASSWORDS = frozenset(
@@ -71,43 +81,6 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-class StreamSettings(_Section):
-    """One camera stream: where frames come from and which drone's camera it is."""
-
-    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
-    uri: str = Field(description="webcam:N, file:PATH, rtsp://..., replay:PATH[@FPS]")
-    drone: str = Field(min_length=1)
-    priority: int = Field(0, ge=0, description="0 = main drone, 1 = secondary, ...")
-
-    @model_validator(mode="after")
-    def _check_uri(self) -> StreamSettings:
-        if not self.uri.startswith(URI_SCHEMES):
-            raise ValueError(
-                f"stream {self.name!r}: uri {self.uri!r} must start with one of "
-                + ", ".join(URI_SCHEMES)
-            )
-        return self
-
-    @property
-    def kind(self) -> str:
-        """`replay` for landmark replays (no pixels), `camera` for everything else."""
-        return "replay" if self.uri.startswith("replay:") else "camera"
-
-
-class GeofenceSettings(_Section):
-    """A vertical cylinder around the home point that no target may leave."""
-
-    radius_m: float = Field(30.0, gt=0)
-    min_alt_m: float = Field(1.0, ge=0)
-    max_alt_m: float = Field(20.0, gt=0)
-
-    @model_validator(mode="after")
-    def _check_alt(self) -> GeofenceSettings:
-        if self.max_alt_m <= self.min_alt_m:
-            raise ValueError("geofence.max_alt_m must be above geofence.min_alt_m")
-        return self
-
-
 class DroneSettings(_Section):
     """One vehicle: its MAVLink connection string and where its home is in the shared
     world frame (metres, x east, y north, z up), so the 3D view can place several."""
@@ -116,38 +89,6 @@ class DroneSettings(_Section):
     connection: str = Field(description="udpin:127.0.0.1:14550, tcp:HOST:PORT, /dev/ttyUSB0")
     sysid: int = Field(1, ge=1, le=255)
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
-
-
-class RecognitionSettings(_Section):
-    """The decision stage: filter, threshold, debounce, arming, handover. A field left
-    unset (None) keeps the live engine's tuned default (see docs/recognition.md)."""
-
-    checkpoint: Path | None = None
-    stride: int | None = Field(None, ge=1, description="classify every N frames")
-    filter_window: int | None = Field(None, ge=1, description="moving average over N")
-    threshold: float | None = Field(None, ge=0, le=1)
-    debounce_s: float | None = Field(None, ge=0)
-    arming_timeout_s: float | None = Field(None, gt=0, description="idle time to disarm")
-    handover_hold_s: float | None = Field(None, ge=0)
-    confirm: int | None = Field(None, ge=1, description="decisions in a row before a command")
-    confirm_by_command: ConfirmByCommand | None = Field(
-        None, description="decisions a command needs in a row, e.g. {land = 9}: safer landings"
-    )
-    threshold_by_command: ThresholdByCommand | None = Field(
-        None, description="threshold per command, e.g. {wave_off = 0.7}: an easier abort"
-    )
-    thumb_hand: ThumbHand | None = Field(
-        None, description="the hand all_clear / not_clear need in view ('off': no check)"
-    )
-    operator_lost_hover_s: float = Field(5.0, gt=0, description="hover after this long")
-
-
-class SafetySettings(_Section):
-    """Checks before any command reaches a vehicle."""
-
-    geofence: GeofenceSettings = GeofenceSettings()
-    max_step_m: float = Field(3.0, gt=0)
-    min_command_interval_s: float = Field(1.0, ge=0)
 
 
 class ServerSettings(_Section):
@@ -177,14 +118,101 @@ class ViewSettings(_Section):
 
 
 class TrainingSettings(_Section):
-    """Federated runs started from the console: on Flower's deployment engine (a local
-    SuperLink and one SuperNode per drone, the default) or its simulation engine."""
+    """Federated runs started from the console: on Flower's Deployment Runtime (a local
+    SuperLink and one SuperNode per drone, the default) or its Simulation Runtime."""
 
     enabled: bool = True
-    engine: Literal["deployment", "simulation"] = "deployment"
+    flower_runtime: Literal["deployment", "simulation"] = "deployment"
+
+
+# Documented keys that were renamed, old path -> new path (section, [table,] key). Each
+# still works, with a warning naming both; setting the old and the new key is an error.
+DEPRECATED_KEYS: dict[tuple[str, ...], tuple[str, ...]] = {
+    ("recognition", "checkpoint"): ("engine", "checkpoint"),
+    ("recognition", "stride"): ("engine", "stride"),
+    ("recognition", "filter_window"): ("recognition", "filter_size"),
+    ("recognition", "arming_timeout_s"): ("recognition", "idle_disarm_s"),
+    ("recognition", "handover_hold_s"): ("recognition", "hold_s"),
+    ("recognition", "operator_lost_hover_s"): ("safety", "operator_lost_s"),
+    ("safety", "min_command_interval_s"): ("safety", "min_interval_s"),
+    ("safety", "geofence", "radius_m"): ("safety", "geofence_radius_m"),
+    ("safety", "geofence", "min_alt_m"): ("safety", "min_altitude_m"),
+    ("safety", "geofence", "max_alt_m"): ("safety", "max_altitude_m"),
+    ("training", "engine"): ("training", "flower_runtime"),
+}
+
+
+def _key_name(path: tuple[str, ...], style: str) -> str:
+    if style == "toml":
+        return f"[{'.'.join(path[:-1])}] {path[-1]}"
+    if style == "env":
+        return "PROXIMA_" + "__".join(path).upper()
+    return ".".join(path)
+
+
+def _table(data: dict[str, Any], path: tuple[str, ...], create: bool = False) -> Any:
+    """The nested dict at `path` (None where a level is missing or not a table)."""
+    node: Any = data
+    for part in path:
+        if not isinstance(node, dict):
+            return None
+        if part not in node and create:
+            node[part] = {}
+        node = node.get(part)
+    return node if isinstance(node, dict) else None
+
+
+def _copy_tables(data: dict[str, Any]) -> dict[str, Any]:
+    return {k: _copy_tables(v) if isinstance(v, dict) else v for k, v in data.items()}
+
+
+def rename_deprecated_keys(data: dict[str, Any], where: str, style: str = "toml") -> dict[str, Any]:
+    """A copy of `data` (one source's raw settings) with each key of `DEPRECATED_KEYS`
+    moved to its new name, warning once per key (`DeprecationWarning` and a log line).
+    `style` says how the message writes keys: "toml", "env" (`PROXIMA_...`) or "python".
+
+    Raises:
+        SettingsError: a deprecated key and its new name are both set (both named).
+    """
+    data = _copy_tables(data)
+    for old, new in DEPRECATED_KEYS.items():
+        parent = _table(data, old[:-1])
+        if parent is None or old[-1] not in parent:
+            continue
+        value = parent.pop(old[-1])
+        if len(old) > 2 and not parent:  # an old table ([safety.geofence]) left empty
+            del _table(data, old[:-2])[old[-2]]
+        old_name, new_name = _key_name(old, style), _key_name(new, style)
+        target = _table(data, new[:-1], create=True)
+        if target is None:
+            raise SettingsError(f"{where}: {old_name} is deprecated, and {new_name} has no table")
+        if new[-1] in target:
+            raise SettingsError(
+                f"{where}: both {old_name} (deprecated) and {new_name} are set; keep {new_name}"
+            )
+        target[new[-1]] = value
+        message = f"{where}: {old_name} is deprecated; use {new_name}"
+        warnings.warn(message, DeprecationWarning, stacklevel=2)
+        log.warning(message)
+    return data
 
 
 _toml_path: ContextVar[Path | None] = ContextVar("proxima_toml_path", default=None)
+
+
+class _RenamedKeys(PydanticBaseSettingsSource):
+    """Another source's values with deprecated keys moved to their new names."""
+
+    def __init__(self, inner: PydanticBaseSettingsSource, where: str | None, style: str) -> None:
+        super().__init__(inner.settings_cls)
+        self.inner, self.where, self.style = inner, where, style
+
+    def get_field_value(self, field: Any, field_name: str) -> tuple[Any, str, bool]:
+        return None, field_name, False
+
+    def __call__(self) -> dict[str, Any]:
+        where = self.where or str(_toml_path.get())
+        return rename_deprecated_keys(self.inner(), where, self.style)
 
 
 class _TomlSource(PydanticBaseSettingsSource):
@@ -215,10 +243,11 @@ class Settings(BaseSettings):
         extra="forbid",
     )
 
-    streams: list[StreamSettings] = []
+    streams: list[StreamSpec] = []
     drones: list[DroneSettings] = []
-    recognition: RecognitionSettings = RecognitionSettings()
-    safety: SafetySettings = SafetySettings()
+    engine: EngineSettings = EngineSettings()
+    recognition: ControlSettings = ControlSettings()
+    safety: SafetyConfig = SafetyConfig()
     server: ServerSettings = ServerSettings()
     view: ViewSettings = ViewSettings()
     training: TrainingSettings = TrainingSettings()
@@ -234,7 +263,11 @@ class Settings(BaseSettings):
         dotenv_settings: PydanticBaseSettingsSource,
         file_secret_settings: PydanticBaseSettingsSource,
     ) -> tuple[PydanticBaseSettingsSource, ...]:
-        return (init_settings, env_settings, _TomlSource(settings_cls))
+        return (
+            _RenamedKeys(init_settings, "arguments", "python"),
+            _RenamedKeys(env_settings, "environment", "env"),
+            _RenamedKeys(_TomlSource(settings_cls), None, "toml"),
+        )
 
     @model_validator(mode="after")
     def _check(self) -> Settings:
@@ -287,7 +320,7 @@ class Settings(BaseSettings):
         finally:
             _toml_path.reset(token)
 
-    def stream(self, name: str) -> StreamSettings:
+    def stream(self, name: str) -> StreamSpec:
         """The stream called `name`.
 
         Raises:

@@ -41,10 +41,12 @@ def test_two_steps_against_a_simulated_drone(tmp_path: Path) -> None:
         admin_password=ADMIN[1],
         drones=[{"name": "main", "connection": f"udpin:127.0.0.1:{port}"}],
         server={"db_path": str(tmp_path / "c.db")},
+        safety={"estop_confirm_s": 8.0},
     )
     runtime = build_runtime(settings, engine=False, view=False)
     try:
         assert runtime.links["main"].state == "ok", runtime.notes
+        assert runtime.drones.safety.cfg is settings.safety  # the [safety] section itself
         with runtime.app.state.console.sessions() as db:
             create_user(db, VIEWER[0], VIEWER[1], Role.VIEWER)
         with BackgroundServer(runtime.app) as server:
@@ -59,7 +61,7 @@ def test_two_steps_against_a_simulated_drone(tmp_path: Path) -> None:
             base = f"{server.url}/api/drones/main/emergency-stop"
             step1 = httpx.post(base, headers=admin).json()
             assert step1["confirmed"] is False and step1["confirmation_id"]
-            assert step1["expires_in_s"] > 0
+            assert step1["expires_in_s"] == 8.0  # [safety] estop_confirm_s
             # A viewer cannot confirm, a wrong id changes nothing.
             body = {"confirmation_id": step1["confirmation_id"]}
             assert httpx.post(f"{base}/confirm", headers=viewer, json=body).status_code == 403

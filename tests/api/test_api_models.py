@@ -26,7 +26,7 @@ def test_list_and_promote_into_the_live_engine(tmp_path: Path, checkpoint_path: 
         admin_user=ADMIN[0],
         admin_password=ADMIN[1],
         streams=[{"name": "front", "uri": f"replay:{laser_clip('hover_f')}@30", "drone": "main"}],
-        recognition={"checkpoint": str(models / "gesture-default.pt")},
+        engine={"checkpoint": str(models / "gesture-default.pt")},
         server={"db_path": str(tmp_path / "c.db"), "models_dir": str(models)},
     )
     runtime = build_runtime(settings, engine=True, drones=False, view=False)
@@ -47,7 +47,7 @@ def test_list_and_promote_into_the_live_engine(tmp_path: Path, checkpoint_path: 
 
             r = httpx.post(f"{server.url}/api/models/runs/fedavg-r5.pt/promote", headers=h)
             assert r.status_code == 200, r.text
-            assert r.json()["streams"] == ["front"]
+            assert r.json()["streams"] == ["front"] and r.json()["pending"] == []
             after = runtime.engine.pipelines["front"].classifier
             assert after is not before and after.window == before.window
             listed = httpx.get(f"{server.url}/api/models", headers=h).json()

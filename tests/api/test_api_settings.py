@@ -38,7 +38,7 @@ def test_toml_then_environment(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
     s = Settings.load(path)
     assert [x.name for x in s.streams] == ["front", "side"]
     assert s.stream("side").kind == "camera" and s.stream("front").kind == "replay"
-    assert s.recognition.debounce_s == 3.5 and s.recognition.threshold is None
+    assert s.recognition.debounce_s == 3.5 and s.recognition.threshold == 0.9  # default
     assert s.server.port == 9000 and s.server.host == "127.0.0.1"
     monkeypatch.setenv("PROXIMA_SERVER__PORT", "9100")
     monkeypatch.setenv("PROXIMA_RECOGNITION__DEBOUNCE_S", "1.5")

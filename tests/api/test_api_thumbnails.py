@@ -80,7 +80,8 @@ def test_camera_stream_thumbnails_from_the_live_engine(tmp_path, checkpoint_path
                 "priority": 1,
             },
         ],
-        recognition={"checkpoint": str(checkpoint_path)},
+        engine={"checkpoint": str(checkpoint_path), "stride": 4},
+        recognition={"release_s": 3.0},
         server={"db_path": str(tmp_path / "c.db"), "thumbnail_hz": 4.0},
     )
     bus = EventBus()
@@ -88,6 +89,10 @@ def test_camera_stream_thumbnails_from_the_live_engine(tmp_path, checkpoint_path
         runtime = build_runtime(settings, bus=bus, engine=True, drones=False, view=False)
         try:
             assert runtime.engine is not None, runtime.notes
+            # The [engine] and [recognition] sections are what the engine runs with.
+            assert runtime.engine.settings is settings.engine
+            assert runtime.engine.control is settings.recognition
+            assert runtime.engine.pipelines["cam"].window.stride == 4
             first = sub.get(timeout=30)
             time.sleep(1.0)
             events = [first, *sub.drain()]

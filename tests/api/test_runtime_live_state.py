@@ -24,7 +24,7 @@ def test_a_stream_state_sent_before_the_app_existed_is_in_the_snapshot(
     settings = Settings.load(
         config=None,
         streams=[{"name": "front", "uri": f"replay:{laser_clip('hover_f')}@30", "drone": "main"}],
-        recognition={"checkpoint": str(checkpoint_path)},
+        engine={"checkpoint": str(checkpoint_path)},
         server={"db_path": str(tmp_path / "c.db")},
     )
     bus = EventBus()

@@ -34,7 +34,7 @@ def test_promote_swaps_the_live_engine_classifier(tmp_path: Path, laser_dir: Pat
     settings = Settings.load(
         config=None, admin_user=ADMIN[0], admin_password=ADMIN[1],
         streams=[{"name": "front", "uri": f"replay:{replay}@30", "drone": "main"}],
-        recognition={"checkpoint": str(default_checkpoint())},
+        engine={"checkpoint": str(default_checkpoint())},
         server={"db_path": str(db), "models_dir": str(models)},
     )  # fmt: skip
     runtime = build_runtime(settings, engine=True, drones=False, view=False)

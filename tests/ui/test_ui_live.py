@@ -44,7 +44,7 @@ def test_tiles_follow_the_engine(page, tmp_path: Path, checkpoint: Path) -> None
             {"name": "main", "connection": "udpin:127.0.0.1:14550"},
             {"name": "second", "connection": "udpin:127.0.0.1:14560", "sysid": 2},
         ],
-        recognition={"checkpoint": str(checkpoint)},
+        engine={"checkpoint": str(checkpoint)},
     )
     assert console.runtime.engine is not None, console.runtime.notes
     gestures = console.bus.subscribe(types=["gesture"])
@@ -106,7 +106,7 @@ def test_a_thumb_gesture_the_camera_cannot_confirm_is_marked_withheld(  # type: 
             {"name": "left", "uri": f"replay:{laser_clip('all_clear_l')}@30", "drone": "main"}
         ],
         drones=[{"name": "main", "connection": "udpin:127.0.0.1:14550"}],
-        recognition={"checkpoint": str(checkpoint)},
+        engine={"checkpoint": str(checkpoint)},
     )
     assert console.runtime.engine is not None, console.runtime.notes
     try:

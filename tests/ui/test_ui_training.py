@@ -54,6 +54,24 @@ def test_viewer_gets_403_on_starting_a_run(page, tmp_path: Path) -> None:  # typ
         login(page, console.url, VIEWER)
         page.click("nav a[data-page=training]")
         page.wait_for_selector("form.start-run")
+        # The form's bounds and choices are FLConfig's, its values the runner's defaults.
+        attrs = page.eval_on_selector_all(
+            "form.start-run input[type=number]",
+            "els => Object.fromEntries(els.map(e => [e.name, [e.min, e.max, e.step, e.value]]))",
+        )
+        assert attrs == {
+            "rounds": ["1", "500", "1", "5"],
+            "local_epochs": ["1", "100", "1", "1"],
+            "batch_size": ["1", "4096", "1", "64"],
+            "learning_rate": ["0", "1", "any", "0.002"],
+            "fraction_fit": ["0", "1", "any", "1"],
+            "min_clients": ["1", "100", "1", "2"],
+        }
+        strategies = page.eval_on_selector_all(
+            "form.start-run select[name=strategy] option", "els => els.map(e => e.value)"
+        )
+        assert strategies == ["fedavg", "fedprox", "fedadam", "fedavgm"]
+        assert page.is_checked("form.start-run input[name=include_samples]")
         with page.expect_response(
             lambda r: r.url.endswith("/api/training/runs") and r.request.method == "POST"
         ) as response:

@@ -12,7 +12,7 @@ from contextlib import asynccontextmanager
 from fastapi import FastAPI
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
-from sqlalchemy import Engine
+from sqlalchemy import Engine as DbEngine
 
 from proxima import __version__
 from proxima.api.hub import WebSocketHub
@@ -71,23 +71,23 @@ def _announce_one_time_password(user: str, password: str) -> None:
 
 def open_database(
     settings: Settings,
-    engine: Engine | None = None,
+    db_engine: DbEngine | None = None,
     announce: Callable[[str, str], None] = _announce_one_time_password,
-) -> Engine:
+) -> DbEngine:
     """The console's database, migrated to the newest schema (rows kept), with a first
     supervisor (from the environment, or a printed one-time password). Idempotent.
 
     Raises:
         sqlalchemy.exc.SQLAlchemyError: the database cannot be opened or migrated.
     """
-    engine = engine or make_engine(settings.server.db_path)
-    migrations.upgrade(engine)
+    db_engine = db_engine or make_engine(settings.server.db_path)
+    migrations.upgrade(db_engine)
     admin_password = settings.admin_password.get_secret_value() if settings.admin_password else None
-    with make_sessionmaker(engine)() as db:
-        created = ensure_first_supervisor(db, settings.admin_user, admin_password)
+    with make_sessionmaker(db_engine)() as session:
+        created = ensure_first_supervisor(session, settings.admin_user, admin_password)
     if created is not None:
         announce(*created)
-    return engine
+    return db_engine
 
 
 def create_app(
@@ -98,7 +98,7 @@ def create_app(
     estop: EmergencyStop | None = None,
     promoter: ModelPromoter | None = None,
     viz_port: int | None = None,
-    db_engine: Engine | None = None,
+    db_engine: DbEngine | None = None,
     live: LiveState | None = None,
     announce: Callable[[str, str], None] = _announce_one_time_password,
 ) -> FastAPI:
@@ -110,13 +110,13 @@ def create_app(
     Raises:
         sqlalchemy.exc.SQLAlchemyError: the database cannot be opened or migrated.
     """
-    engine = open_database(settings, db_engine, announce)
-    sessions = make_sessionmaker(engine)
+    db_engine = open_database(settings, db_engine, announce)
+    sessions = make_sessionmaker(db_engine)
 
     console = Console(
         settings=settings,
         bus=bus,
-        db_engine=engine,
+        db_engine=db_engine,
         sessions=sessions,
         hub=WebSocketHub(bus),
         live=live or LiveState(bus),

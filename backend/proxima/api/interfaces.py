@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from typing import Any, Protocol, runtime_checkable
 
+from proxima.federated.config import FLConfig
+
 
 class Unavailable(RuntimeError):
     """The subsystem behind a route is not running in this process."""
@@ -18,7 +20,12 @@ class Unavailable(RuntimeError):
 @runtime_checkable
 class TrainingRunner(Protocol):
     """Starts federated runs and reports them. Runs publish per-round metrics on the bus;
-    `get_run` returns what is persisted."""
+    `get_run` returns what is persisted; `defaults` fills the Training form."""
+
+    @property
+    def defaults(self) -> FLConfig:
+        """The parameters of a run for every field its request leaves out."""
+        ...
 
     def start_run(self, params: dict[str, Any]) -> str:
         """Start a run with these parameters; returns its id at once (runs in background).
@@ -64,7 +71,8 @@ class ModelPromoter(Protocol):
     """Puts a checkpoint into the live engine (an explicit action, never automatic)."""
 
     def promote(self, checkpoint_path: str) -> dict[str, Any]:
-        """Load the checkpoint into every stream's classifier; returns what was loaded.
+        """Load the checkpoint into every stream's classifier; returns what was loaded
+        (`streams`, `window`, and `pending`: streams that have not switched yet).
 
         Raises:
             ValueError: the file is not a usable checkpoint.

@@ -8,43 +8,26 @@ pretends. `proxima serve` and the demo use this.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fastapi import FastAPI
-from sqlalchemy import Engine
+from sqlalchemy import Engine as DbEngine
 
 from proxima.api.app import create_app, open_database
 from proxima.api.live import LiveState
 from proxima.events import EventBus
 from proxima.settings import Settings
 
+if TYPE_CHECKING:
+    from proxima.api.promote import EnginePromoter
+    from proxima.engine import Engine
+    from proxima.engine.stream import Classifier
+    from proxima.federated.runner import FederatedRunner
+
 log = logging.getLogger(__name__)
-
-
-def control_settings(settings: Settings) -> Any:
-    """The engine's ControlSettings with the overrides set in `settings.recognition`."""
-    from proxima.control import ControlSettings
-
-    r = settings.recognition
-    names = {
-        "filter_window": "filter_size",
-        "threshold": "threshold",
-        "debounce_s": "debounce_s",
-        "arming_timeout_s": "idle_disarm_s",
-        "handover_hold_s": "hold_s",
-        "confirm": "confirm",
-        "confirm_by_command": "confirm_by_command",
-        "threshold_by_command": "threshold_by_command",
-        "thumb_hand": "thumb_hand",
-    }
-    overrides = {
-        theirs: getattr(r, ours) for ours, theirs in names.items() if getattr(r, ours) is not None
-    }
-    return ControlSettings(**overrides)
 
 
 @dataclass
@@ -54,11 +37,13 @@ class ConsoleRuntime:
     settings: Settings
     bus: EventBus
     app: FastAPI
-    engine: Any = None  # proxima.engine.Engine
+    realtime: bool = True  # file and replay streams paced to their timestamps
+    engine: Engine | None = None
+    promoter: EnginePromoter | None = None  # follows `engine`
     drones: Any = None  # proxima.drone.controller.DroneController
     links: dict[str, Any] = field(default_factory=dict)
     view: Any = None  # proxima.viz.scene.FleetView
-    training: Any = None  # proxima.federated.runner.FederatedRunner
+    training: FederatedRunner | None = None
     notes: list[str] = field(default_factory=list)
 
     def close(self) -> None:
@@ -73,58 +58,67 @@ class ConsoleRuntime:
         if self.view is not None:
             self.view.stop()
 
+    def restart_engine(self) -> Engine:
+        """Stop the live engine and start a fresh one on the same streams (new stream
+        time, disarmed) with the classifier the old one ran, so a promoted model stays;
+        the thumbnails and the promoter follow. The demo's replay loop uses this.
 
-def _start_engine(settings: Settings, bus: EventBus, realtime: bool) -> Any:
-    from proxima.engine import Engine, EngineSettings, StreamSpec
+        Raises:
+            RuntimeError: no live engine runs in this console.
+        """
+        old = self.engine
+        if old is None:
+            raise RuntimeError("no live engine runs in this console")
+        old.stop()
+        engine = start_engine(
+            self.settings, self.bus, self.realtime, old.classifier(old.specs[0].name)
+        )
+        self.engine = engine
+        if self.promoter is not None:
+            self.promoter.attach(engine)
+        return engine
 
-    specs = [
-        StreamSpec(name=s.name, uri=s.uri, drone=s.drone)
-        for s in sorted(settings.streams, key=lambda s: (s.priority, s.name))
-    ]
-    engine_settings = (
-        EngineSettings(stride=settings.recognition.stride)
-        if settings.recognition.stride is not None
-        else EngineSettings()
-    )
+
+def start_engine(
+    settings: Settings, bus: EventBus, realtime: bool, classifier: Classifier | None = None
+) -> Engine:
+    """The live engine for the configured streams (ranked by priority, then name), with
+    thumbnails tapped from the first frame, started. `classifier` replaces
+    `settings.engine.checkpoint` for the streams that name no checkpoint of their own.
+
+    Raises:
+        FileNotFoundError, ValueError: a checkpoint is missing or not a checkpoint.
+    """
+    from proxima.engine import Engine
+
+    specs = sorted(settings.streams, key=lambda s: (s.priority, s.name))
     engine = Engine(
         specs,
         bus,
-        control=control_settings(settings),
-        settings=engine_settings,
+        control=settings.recognition,
+        settings=settings.engine,
         realtime=realtime,
-        checkpoint=settings.recognition.checkpoint,
+        classifier=classifier,
     )
-    engine.start()
     tap_thumbnails(engine, settings, bus)
-    return engine
+    return engine.start()
 
 
-def tap_thumbnails(engine: Any, settings: Settings, bus: EventBus) -> list[str]:
+def tap_thumbnails(engine: Engine, settings: Settings, bus: EventBus) -> list[str]:
     """Publish JPEG thumbnails of every camera stream's frames (at `server.thumbnail_hz`)
-    from the engine's stream threads; replayed streams have no pixels and get none.
-    Returns the streams tapped.
-
-    The engine has no frame hook, so each camera pipeline's `process` is wrapped: the
-    thumbnail is offered the frame, then the pipeline runs as before.
-    """
+    through a frame tap on the engine's stream threads; replayed streams have no pixels
+    and get none. Returns the streams tapped."""
     from proxima.api.thumbnails import ThumbnailTap
 
+    running = {spec.name for spec in engine.specs}
     tapped = []
     for s in settings.streams:
-        pipeline = engine.pipelines.get(s.name)
-        if s.kind != "camera" or pipeline is None:
+        if s.kind != "camera" or s.name not in running:
             continue
         tap = ThumbnailTap(
             bus, s.name, settings.server.thumbnail_hz, settings.server.thumbnail_width
         )
-        original = pipeline.process
-
-        def process(frame: Any, _original: Any = original, _tap: ThumbnailTap = tap) -> Any:
-            with contextlib.suppress(ValueError):  # an odd frame never stops recognition
-                _tap.offer(frame)
-            return _original(frame)
-
-        pipeline.process = process
+        engine.add_tap(s.name, on_frame=tap)
         tapped.append(s.name)
     return tapped
 
@@ -143,10 +137,9 @@ def federated_drones(settings: Settings) -> list[Any] | None:
     return [Drone(d.name, i, n, samples_db=db) for i, d in enumerate(settings.drones)]
 
 
-def _start_drones(settings: Settings, bus: EventBus, db: Engine, rt: ConsoleRuntime) -> Any:
+def _start_drones(settings: Settings, bus: EventBus, db: DbEngine, rt: ConsoleRuntime) -> Any:
     from proxima.drone.controller import DroneController, EmergencyStopService
     from proxima.drone.mavlink_link import MavlinkLink
-    from proxima.drone.safety import SafetyConfig
     from proxima.store.command_log import CommandLog
 
     for d in settings.drones:
@@ -156,9 +149,7 @@ def _start_drones(settings: Settings, bus: EventBus, db: Engine, rt: ConsoleRunt
             link.connect(timeout=10.0)
         except Exception as exc:  # the link keeps trying; its state shows "connecting"
             rt.notes.append(f"drone {d.name}: {exc}")
-    controller = DroneController(
-        rt.links, safety=SafetyConfig.from_settings(settings), log=CommandLog(db), bus=bus
-    )
+    controller = DroneController(rt.links, safety=settings.safety, log=CommandLog(db), bus=bus)
     controller.attach(bus)
     rt.drones = controller
     return EmergencyStopService(controller)
@@ -183,7 +174,7 @@ def build_runtime(
     db = open_database(settings)  # first: every other part writes to it
     # Listening before anything publishes: stream and link states are sent on change only.
     live = LiveState(bus)
-    rt = ConsoleRuntime(settings=settings, bus=bus, app=FastAPI())
+    rt = ConsoleRuntime(settings=settings, bus=bus, app=FastAPI(), realtime=realtime)
     estop = None
     if drones and settings.drones:
         try:
@@ -193,13 +184,12 @@ def build_runtime(
     elif not settings.drones:
         rt.notes.append("no drones configured: emergency stop unavailable")
 
-    promoter = None
     if engine and settings.streams:
         try:
-            rt.engine = _start_engine(settings, bus, realtime)
+            rt.engine = start_engine(settings, bus, realtime)
             from proxima.api.promote import EnginePromoter
 
-            promoter = EnginePromoter(rt.engine, settings.recognition.checkpoint)
+            rt.promoter = EnginePromoter(rt.engine, settings.engine.checkpoint)
         except Exception as exc:
             rt.notes.append(f"live engine not started: {type(exc).__name__}: {exc}")
     elif not settings.streams:
@@ -213,19 +203,17 @@ def build_runtime(
         except Exception as exc:
             rt.notes.append(f"3D view not started: {type(exc).__name__}: {exc}")
 
-    runner = None
     if training if training is not None else settings.training.enabled:
         try:
             from proxima.federated.runner import FederatedRunner
 
-            runner = FederatedRunner(
+            rt.training = FederatedRunner(
                 settings.server.db_path,
                 settings.server.models_dir,
                 bus=bus,
-                engine=settings.training.engine,
+                flower_runtime=settings.training.flower_runtime,
                 drones=federated_drones(settings),
             )
-            rt.training = runner
         except Exception as exc:
             rt.notes.append(f"federated runner not available: {type(exc).__name__}: {exc}")
     else:
@@ -234,9 +222,9 @@ def build_runtime(
     rt.app = create_app(
         settings,
         bus,
-        training=runner,
+        training=rt.training,
         estop=estop,
-        promoter=promoter,
+        promoter=rt.promoter,
         viz_port=rt.view.port if rt.view else None,
         db_engine=db,
         live=live,

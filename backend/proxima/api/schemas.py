@@ -7,6 +7,16 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from proxima.api.recorder import MAX_COUNTDOWN_S, MAX_FRAMES
+from proxima.federated.config import (
+    BatchSize,
+    FractionFit,
+    LearningRate,
+    LocalEpochs,
+    MinClients,
+    Partition,
+    Rounds,
+    Strategy,
+)
 
 
 class _In(BaseModel):
@@ -97,18 +107,24 @@ class SampleReview(_In):
 
 
 class TrainingStart(_In):
-    """A federated run's parameters; a field left out keeps the runner's default (the
-    paper's sample-weighted FedAvg, one camera view per drone)."""
+    """A federated run's parameters: the fields of the console's form, with the types and
+    bounds of `proxima.federated.config.FLConfig` (a test checks they stay equal). A
+    field left out keeps the runner's default (the paper's sample-weighted FedAvg, one
+    camera view per drone)."""
 
-    rounds: int | None = Field(None, ge=1, le=500)
-    local_epochs: int | None = Field(None, ge=1, le=100)
-    batch_size: int | None = Field(None, ge=1, le=4096)
-    learning_rate: float | None = Field(None, gt=0, le=1)
-    fraction_fit: float | None = Field(None, gt=0, le=1)
-    min_clients: int | None = Field(None, ge=1, le=100)
-    strategy: Literal["fedavg", "fedprox", "fedadam", "fedavgm"] | None = None
-    partition: Literal["view", "iid", "dirichlet"] | None = None
+    rounds: Rounds | None = None
+    local_epochs: LocalEpochs | None = None
+    batch_size: BatchSize | None = None
+    learning_rate: LearningRate | None = None
+    fraction_fit: FractionFit | None = None
+    min_clients: MinClients | None = None
+    strategy: Strategy | None = None
+    partition: Partition | None = None
     include_samples: bool | None = None
+
+
+# The form's fields, in the order the Training page shows them.
+TRAINING_FORM: tuple[str, ...] = tuple(TrainingStart.model_fields)
 
 
 class EstopConfirm(_In):

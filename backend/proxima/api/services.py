@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
-from sqlalchemy import Engine
+from sqlalchemy import Engine as DbEngine
 from sqlalchemy.orm import sessionmaker
 
 from proxima.api.hub import WebSocketHub
@@ -21,7 +21,7 @@ from proxima.settings import Settings
 class Console:
     settings: Settings
     bus: EventBus
-    db_engine: Engine
+    db_engine: DbEngine
     sessions: sessionmaker
     hub: WebSocketHub
     live: LiveState

@@ -20,7 +20,8 @@ from proxima.types import Frame
 
 class ThumbnailTap:
     """Call `offer(frame)` for every frame of one stream; it publishes a thumbnail when
-    the last one is older than 1/hz seconds (wall clock) and returns whether it did."""
+    the last one is older than 1/hz seconds (wall clock) and returns whether it did.
+    An instance is also a frame tap (`Engine.add_tap(stream, on_frame=tap)`)."""
 
     def __init__(
         self, bus: EventBus, stream: str, hz: float = 2.0, width: int = 320, quality: int = 70
@@ -46,6 +47,10 @@ class ThumbnailTap:
         self.bus.publish(self.encode(image, frame.t))
         self.sent += 1
         return True
+
+    def __call__(self, frame: Frame) -> None:
+        """The frame-tap form of `offer` (the frame goes on to recognition unchanged)."""
+        self.offer(frame)
 
     def encode(self, image: np.ndarray, t: float) -> ThumbnailEvent:
         """A ThumbnailEvent of a BGR uint8 image, shrunk to `width` (never enlarged).

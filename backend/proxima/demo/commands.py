@@ -70,7 +70,7 @@ def demo(
         if not checkpoint.is_file():
             err.print(f"[red]error:[/red] {checkpoint}: no such checkpoint")
             raise typer.Exit(2)
-        update["recognition"] = settings.recognition.model_copy(update={"checkpoint": checkpoint})
+        update["engine"] = settings.engine.model_copy(update={"checkpoint": checkpoint})
     settings = settings.model_copy(update=update)
     log_dir = Path(settings.server.db_path).parent
 

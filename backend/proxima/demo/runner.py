@@ -132,38 +132,17 @@ class Demo:
             if engine is None or not self._replays_ended(engine):
                 continue
             try:
-                self._restart_engine(engine)
+                self._restart_engine()
             except Exception as exc:  # report, keep the console up
                 self.say(f"replay loop stopped: {type(exc).__name__}: {exc}")
                 return
 
-    def _restart_engine(self, old: Any) -> None:
+    def _restart_engine(self) -> None:
         """Play the replays again: a fresh engine (new stream time, disarmed) with the
         classifier the old one ran (so a model promoted in the console stays)."""
-        from proxima.api.runtime import control_settings, tap_thumbnails
-        from proxima.engine import Engine, EngineSettings
-
-        old.stop()
-        if self.stop_requested.is_set():
+        if self.stop_requested.is_set() or self.runtime is None:
             return
-        first = next(iter(old.pipelines.values()), None)
-        stride = self.settings.recognition.stride
-        engine = Engine(
-            old.specs,
-            self.runtime.bus,
-            control=control_settings(self.settings),
-            settings=EngineSettings(stride=stride) if stride else EngineSettings(),
-            realtime=True,
-            classifier=first.classifier if first is not None else None,
-            checkpoint=self.settings.recognition.checkpoint,
-        )
-        engine.start()
-        tap_thumbnails(engine, self.settings, self.runtime.bus)
-        self.runtime.engine = engine
-        console = getattr(self.runtime.app.state, "console", None)
-        promoter = getattr(console, "promoter", None)
-        if promoter is not None and hasattr(promoter, "engine"):
-            promoter.engine = engine
+        self.runtime.restart_engine()
         self.loops += 1
 
     # --- stop ----------------------------------------------------------------------------

@@ -18,50 +18,35 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 RATE_LIMITED = frozenset({"move", "change_speed", "resume_speed"})
 
 
-@dataclass
-class SafetyConfig:
-    """The limits; defaults suit proximal flight a few metres from the operator."""
+class SafetyConfig(BaseModel):
+    """The limits; defaults suit proximal flight a few metres from the operator. This is
+    the `[safety]` section of `proxima.settings.Settings` as it is."""
 
-    geofence_radius_m: float = 30.0
-    min_altitude_m: float = 1.0
-    max_altitude_m: float = 20.0
-    max_step_m: float = 3.0
-    min_interval_s: float = 1.0
-    operator_lost_s: float = 5.0
-    estop_confirm_s: float = 10.0
+    model_config = ConfigDict(frozen=True, extra="forbid")
 
-    def __post_init__(self) -> None:
-        for name in (
-            "geofence_radius_m",
-            "max_altitude_m",
-            "max_step_m",
-            "operator_lost_s",
-            "estop_confirm_s",
-        ):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"SafetyConfig.{name} must be positive")
-        if not 0 <= self.min_altitude_m < self.max_altitude_m:
+    geofence_radius_m: float = Field(30.0, gt=0, description="targets stay this near home")
+    min_altitude_m: float = Field(1.0, ge=0, description="lowest target altitude (land below)")
+    max_altitude_m: float = Field(20.0, gt=0, description="highest target altitude")
+    max_step_m: float = Field(3.0, gt=0, description="longest single move")
+    min_interval_s: float = Field(1.0, ge=0, description="least time between motion commands")
+    operator_lost_s: float = Field(
+        5.0, gt=0, description="hover when no stream saw the operator for this long"
+    )
+    estop_confirm_s: float = Field(
+        10.0, gt=0, description="an emergency stop must be confirmed within this"
+    )
+
+    @model_validator(mode="after")
+    def _check_band(self) -> SafetyConfig:
+        if not self.min_altitude_m < self.max_altitude_m:
             raise ValueError("SafetyConfig needs 0 <= min_altitude_m < max_altitude_m")
-        if self.min_interval_s < 0:
-            raise ValueError("SafetyConfig.min_interval_s must not be negative")
-
-    @classmethod
-    def from_settings(cls, settings: Any) -> SafetyConfig:
-        """The limits from `proxima.settings.Settings` (its `safety` and `recognition`)."""
-        s, fence = settings.safety, settings.safety.geofence
-        return cls(
-            geofence_radius_m=fence.radius_m,
-            min_altitude_m=fence.min_alt_m,
-            max_altitude_m=fence.max_alt_m,
-            max_step_m=s.max_step_m,
-            min_interval_s=s.min_command_interval_s,
-            operator_lost_s=settings.recognition.operator_lost_hover_s,
-        )
+        return self
 
 
 @dataclass(frozen=True)

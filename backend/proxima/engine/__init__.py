@@ -3,8 +3,9 @@ classifier -> filter), a time-ordered merge into the decision path (arbiter, deb
 arming), typed events on an `EventBus` and a JSONL event writer. Stitched replay streams
 and their scoring are `proxima.evaluation`.
 
-Public API: `Engine`, `StreamSpec`, `EngineSettings`, `StreamPipeline`,
-`TimeOrderedMerge`, `JsonlWriter`, `PoseWindow`.
+Public API: `Engine` (with its hooks: frame taps, classifier swap), `StreamSpec`,
+`EngineSettings`, `StreamPipeline`, `ClassifierSwap`, `Tap`, `TimeOrderedMerge`,
+`JsonlWriter`, `PoseWindow`.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import Any
 # Lazy exports, so that registering `proxima recognize` does not import pydantic, torch
 # and the rest for every other subcommand.
 _EXPORTS = {
+    "ClassifierSwap": "stream",
     "Engine": "runner",
     "EngineSettings": "config",
     "JsonlWriter": "jsonl",
@@ -22,6 +24,7 @@ _EXPORTS = {
     "StreamPipeline": "stream",
     "StreamSpec": "config",
     "StreamStats": "runner",
+    "Tap": "taps",
     "TimeOrderedMerge": "merge",
     "load_classifier": "runner",
 }

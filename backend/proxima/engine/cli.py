@@ -50,6 +50,7 @@ def recognize(
     try:
         control = ControlSettings(**{k: v for k, v in overrides.items() if v is not None})
         settings = EngineSettings(
+            checkpoint=checkpoint,
             pose_every=pose_every,
             pose_model=pose_model,
             **({"stride": stride} if stride is not None else {}),
@@ -61,9 +62,7 @@ def recognize(
     bus = EventBus()
     commands: list[CommandEvent] = []
     bus.add_listener(lambda e: commands.append(e) if isinstance(e, CommandEvent) else None)
-    engine = Engine(
-        [spec], bus, control=control, settings=settings, realtime=realtime, checkpoint=checkpoint
-    )
+    engine = Engine([spec], bus, control=control, settings=settings, realtime=realtime)
     try:
         writer = JsonlWriter(events, bus)
     except OSError as exc:

@@ -1,27 +1,55 @@
-"""Settings of the per-stream recognition pipeline and the multi-stream runner."""
+"""Settings of the per-stream recognition pipeline and the multi-stream runner.
+
+Both models are sections of `proxima.settings.Settings` as they are (`[[streams]]` and
+`[engine]` in a console's TOML file), so every field here can be set from there.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+# The stream URIs `proxima.ingest.open_source` opens (what a spec may name).
+URI_SCHEMES = ("webcam:", "file:", "rtsp://", "rtsps://", "replay:")
+NAME_PATTERN = r"^[A-Za-z0-9_.-]+$"
 
 
 class StreamSpec(BaseModel):
     """One camera stream: its name, where frames come from and which drone carries it.
 
-    Streams are ranked by their order in the engine's list (main first)."""
+    Streams are ranked by `priority` (0 = the main drone's camera, 1 = secondary, ...),
+    ties by their order in the engine's list."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
-    name: str = Field(min_length=1)
-    uri: str = Field(min_length=1, description="webcam:N, file:PATH, rtsp://..., replay:PATH[@FPS]")
-    drone: str = Field("", description="drone whose camera this is (default: the stream name)")
+    name: str = Field(min_length=1, pattern=NAME_PATTERN)
+    uri: str = Field(description="webcam:N, file:PATH, rtsp://..., replay:PATH[@FPS]")
+    drone: str = Field("", description="drone whose camera this is (default: the name)")
+    priority: int = Field(0, ge=0, description="0 = main drone, 1 = secondary, ...")
     checkpoint: Path | None = Field(None, description="gesture model (default: the engine's)")
 
+    @model_validator(mode="before")
+    @classmethod
+    def _default_drone(cls, data: Any) -> Any:
+        if isinstance(data, dict) and not data.get("drone"):
+            return {**data, "drone": data.get("name", "")}
+        return data
+
+    @model_validator(mode="after")
+    def _check_uri(self) -> StreamSpec:
+        if not self.uri.startswith(URI_SCHEMES):
+            raise ValueError(
+                f"stream {self.name!r}: uri {self.uri!r} must start with one of "
+                + ", ".join(URI_SCHEMES)
+            )
+        return self
+
     @property
-    def drone_name(self) -> str:
-        return self.drone or self.name
+    def kind(self) -> str:
+        """`replay` for landmark replays (no pixels), `camera` for everything else."""
+        return "replay" if self.uri.startswith("replay:") else "camera"
 
 
 class EngineSettings(BaseModel):
@@ -29,6 +57,11 @@ class EngineSettings(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
+    checkpoint: Path | None = Field(
+        None,
+        description="gesture model of the streams that name none (default: the shipped "
+        "one, `proxima.gesture.classifier.default_checkpoint()`)",
+    )
     stride: int = Field(
         5, ge=1, description="classify the window every `stride` frames (tuned at 30 fps)"
     )

@@ -8,8 +8,13 @@ Each stream thread runs source -> pose -> window -> classifier -> filter and pub
 pose, gesture, action and stream events itself; its updates go through the
 `TimeOrderedMerge` to one `CommandController` (arbiter, debounce, arming), which decides
 the handover, arming and command events for the controlled drone (by default the first
-stream's drone). A stream that fails (bad URI, unreadable file, dropped camera) shows as
-a `stream` event in state `ended` with the reason; the other streams go on.
+stream's drone). A stream that fails (unreadable file, dropped camera) shows as a
+`stream` event in state `ended` with the reason; the other streams go on.
+
+Hooks for the rest of the system (the console's thumbnails, the scenario clock, model
+promotion): `add_tap` registers a frame tap on a stream (`proxima.engine.taps`), before
+or after `start`; `swap_classifier` changes a running stream's model from any thread,
+applied by the stream thread before its next frame (`proxima.engine.stream`).
 """
 
 from __future__ import annotations
@@ -24,7 +29,8 @@ from pathlib import Path
 from proxima.control import CommandController, ControlSettings, Sight, StreamUpdate
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.merge import TimeOrderedMerge
-from proxima.engine.stream import Classifier, StreamPipeline
+from proxima.engine.stream import Classifier, ClassifierSwap, StreamPipeline
+from proxima.engine.taps import FrameTap, StreamTaps, Tap, UpdateTap
 from proxima.events import ArmingEvent, EventBus, StreamEvent
 from proxima.ingest import FrameSource, SourceError, StateChange, open_source
 from proxima.types import Event, StreamState
@@ -59,9 +65,11 @@ def load_classifier(path: str | Path | None) -> Classifier:
 class Engine:
     """Runs several ranked streams into one decision path on an `EventBus`.
 
+    Streams are ranked by `StreamSpec.priority`, ties by their order in `streams`.
     `realtime=False` lets file and replay sources run as fast as possible (decisions use
     stream time, so they come out the same). `classifier` is shared by streams that name
-    no checkpoint of their own; by default the shipped model is loaded.
+    no checkpoint of their own; without it `settings.checkpoint` (default: the shipped
+    model) is loaded.
 
     Raises:
         ValueError: (constructor) no streams, or duplicate stream names.
@@ -77,21 +85,20 @@ class Engine:
         drone: str | None = None,
         realtime: bool = True,
         classifier: Classifier | None = None,
-        checkpoint: str | Path | None = None,
     ) -> None:
         if not streams:
             raise ValueError("the engine needs at least one stream")
-        names = [s.name for s in streams]
+        self.specs = sorted(streams, key=lambda s: s.priority)  # stable: ties keep order
+        names = [s.name for s in self.specs]
         if len(set(names)) != len(names):
             raise ValueError(f"stream names must be unique: {names}")
-        self.specs = list(streams)
         self.bus = bus
         self.control = control or ControlSettings()
         self.settings = settings or EngineSettings()
-        self.drone = drone or self.specs[0].drone_name
+        self.drone = drone or self.specs[0].drone
         self.realtime = realtime
         self._default_classifier = classifier
-        self._checkpoint = checkpoint
+        self._taps = {name: StreamTaps(name) for name in names}
         self.controller = CommandController(names, self.drone, self.control)
         self.merge = TimeOrderedMerge(
             self.controller, self._publish_decision, names, self.settings.stale_after_s
@@ -111,7 +118,7 @@ class Engine:
             if spec.checkpoint is None and self._default_classifier is not None:
                 out[spec.name] = self._default_classifier
                 continue
-            path = spec.checkpoint or self._checkpoint
+            path = spec.checkpoint or self.settings.checkpoint
             key = str(path)
             if key not in cache:
                 cache[key] = load_classifier(path)
@@ -132,7 +139,12 @@ class Engine:
         classifiers = self._classifiers()
         for spec in self.specs:
             self.pipelines[spec.name] = StreamPipeline(
-                spec, classifiers[spec.name], self.bus.publish, self.control, self.settings
+                spec,
+                classifiers[spec.name],
+                self.bus.publish,
+                self.control,
+                self.settings,
+                self._taps[spec.name],
             )
         self._started = True
         for spec in self.specs:
@@ -142,6 +154,51 @@ class Engine:
             self._threads.append(thread)
             thread.start()
         return self
+
+    # -- hooks ----------------------------------------------------------------------------
+    def add_tap(
+        self, stream: str, on_frame: FrameTap | None = None, on_update: UpdateTap | None = None
+    ) -> Tap:
+        """Register a frame tap on `stream` (before or after `start`); see
+        `proxima.engine.taps` for when each callable runs and what a failure does.
+
+        Raises:
+            KeyError: no such stream.
+            ValueError: neither callable given.
+        """
+        return self._taps[stream].add(on_frame, on_update)
+
+    def remove_tap(self, tap: Tap) -> None:
+        """Unregister a tap `add_tap` returned."""
+        self._taps[tap.stream].remove(tap)
+
+    def classifier(self, stream: str) -> Classifier:
+        """The classifier `stream` classifies with now.
+
+        Raises:
+            RuntimeError: the engine was not started (no model is loaded yet).
+            KeyError: no such stream.
+        """
+        if not self._started:
+            raise RuntimeError("the engine is not started: no classifier is loaded yet")
+        return self.pipelines[stream].classifier
+
+    def swap_classifier(
+        self, classifier: Classifier, streams: Sequence[str] | None = None
+    ) -> list[ClassifierSwap]:
+        """Ask `streams` (default: all) to classify with `classifier` from their next frame
+        on; thread-safe, returns at once. Each `ClassifierSwap` is set when its stream
+        thread has applied it (`wait(timeout)`).
+
+        Raises:
+            RuntimeError: the engine was not started.
+            KeyError: no such stream.
+        """
+        if not self._started:
+            raise RuntimeError("the engine is not started: start it before swapping models")
+        names = list(streams) if streams is not None else [s.name for s in self.specs]
+        pipelines = [self.pipelines[name] for name in names]
+        return [p.swap_classifier(classifier) for p in pipelines]
 
     # -- decisions ------------------------------------------------------------------------
     def _publish_decision(self, event: Event) -> None:

@@ -5,12 +5,28 @@ Replayed frames carry their pose, so pose estimation and operator tracking are s
 for them (the replayed landmarks are used exactly as recorded); camera frames go through
 MediaPipe and the operator tracker, created on the first image so a replay never loads
 MediaPipe. The result of every frame is a `StreamUpdate` for the decision path.
+
+Two hooks let other parts join without touching the pipeline's state from their own
+threads: frame taps (`proxima.engine.taps`) and the classifier swap. A swap is requested
+from any thread (`swap_classifier`) and applied by the stream thread before its next
+frame, so before its next window. The rules on applying it:
+
+- the moving-average filter is emptied: two models' probabilities are never averaged,
+  so the first command after a swap needs `filter_size` recognitions of the new model;
+- the pose window is kept when the new model's window has the same length (poses do not
+  depend on the model: the next due classification already uses the new one); a model
+  with another window length starts from an empty window.
+
+The returned `ClassifierSwap` is set once applied, with the stream time of the first frame
+the new model was there for; a stream that has ended applies a swap at once (`t` None).
 """
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -23,10 +39,13 @@ from proxima.control import (
     StreamUpdate,
 )
 from proxima.engine.config import EngineSettings, StreamSpec
+from proxima.engine.taps import StreamTaps
 from proxima.engine.window import PoseWindow
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
 from proxima.pose import operator_sight
 from proxima.types import Event, Frame, Pose
+
+log = logging.getLogger(__name__)
 
 DATASET_ASPECT = 16 / 9  # the LASER videos; replayed poses carry no image size
 
@@ -40,6 +59,23 @@ class Classifier(Protocol):
     def predict(
         self, xyz: np.ndarray, visibility: np.ndarray | None = None, aspect: float = ...
     ) -> np.ndarray: ...
+
+
+@dataclass(eq=False)
+class ClassifierSwap:
+    """A requested classifier change of one stream. `applied` is set by the stream thread
+    once the new classifier is in place (or at once for an ended stream), and also when a
+    newer request replaced this one before it was applied (`replaced` True)."""
+
+    stream: str
+    classifier: Classifier
+    applied: threading.Event = field(default_factory=threading.Event)
+    t: float | None = None  # stream time of the first frame the new classifier was there for
+    replaced: bool = False
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Block until applied (or replaced); return whether it was within `timeout`."""
+        return self.applied.wait(timeout)
 
 
 class ImagePoseStage:
@@ -64,7 +100,8 @@ class ImagePoseStage:
 
 
 class StreamPipeline:
-    """Per-stream state and processing; `process(frame)` runs in the stream's thread."""
+    """Per-stream state and processing; `process(frame)` runs in the stream's thread
+    (taps, then the stages, then the update taps)."""
 
     def __init__(
         self,
@@ -73,22 +110,63 @@ class StreamPipeline:
         publish: Callable[[Event], None],
         control: ControlSettings | None = None,
         settings: EngineSettings | None = None,
+        taps: StreamTaps | None = None,
     ) -> None:
-        control = control or ControlSettings()
+        self.control = control or ControlSettings()
         self.settings = settings or EngineSettings()
         self.spec = spec
         self.name = spec.name
-        self.classifier = classifier
         self.publish = publish
+        self.taps = taps if taps is not None else StreamTaps(spec.name)
+        self._classifier = classifier
         self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
-        self.filter = MovingAverageFilter.from_settings(control, classifier.labels)
-        self.evidence = HandEvidence.from_settings(control)
+        self.filter = MovingAverageFilter.from_settings(self.control, classifier.labels)
+        self.evidence = HandEvidence.from_settings(self.control)
         self.frames = 0
         self.classifications = 0
         self._pose_stage: ImagePoseStage | None = None
         self._track_id = 0
         self._lock_request: bool | None = None  # set by the decision path, any thread
         self._lock_guard = threading.Lock()
+        self._swap: ClassifierSwap | None = None  # requested from any thread
+        self._swap_guard = threading.Lock()
+        self._closed = False
+
+    @property
+    def classifier(self) -> Classifier:
+        """The classifier this stream's windows go to (a requested swap once applied)."""
+        return self._classifier
+
+    def swap_classifier(self, classifier: Classifier) -> ClassifierSwap:
+        """Classify with `classifier` from the stream's next frame on (see the module for
+        what is reset). Thread-safe; returns at once. A request not yet applied is
+        replaced by a newer one."""
+        swap = ClassifierSwap(self.name, classifier)
+        with self._swap_guard:
+            older, self._swap = self._swap, swap
+            if self._closed:  # no stream thread any more: nothing classifies meanwhile
+                self._swap = None
+                self._install(swap, None)
+        if older is not None:
+            older.replaced = True
+            older.applied.set()
+        return swap
+
+    def _apply_swap(self, t: float | None) -> None:
+        with self._swap_guard:
+            swap, self._swap = self._swap, None
+        if swap is not None:
+            self._install(swap, t)
+
+    def _install(self, swap: ClassifierSwap, t: float | None) -> None:
+        clf = swap.classifier
+        if clf.window != self.window.size:
+            self.window = PoseWindow(clf.window, self.settings.stride, self.settings.max_gap_s)
+        self.filter = MovingAverageFilter.from_settings(self.control, clf.labels)
+        self._classifier = clf
+        swap.t = t
+        swap.applied.set()
+        log.info("stream %s: classifier swapped (window %d) at t=%s", self.name, clf.window, t)
 
     def request_operator_lock(self, locked: bool) -> None:
         """Follow only the current operator (armed) or anyone again (disarmed); applied
@@ -122,7 +200,14 @@ class StreamPipeline:
         return pose
 
     def process(self, frame: Frame) -> StreamUpdate:
-        """Run one frame through the stream's stages; return its update."""
+        """Run one frame through the taps and the stream's stages; return its update."""
+        self._apply_swap(frame.t)
+        frame = self.taps.before(frame)
+        update = self._recognise(frame)
+        self.taps.after(frame, update)
+        return update
+
+    def _recognise(self, frame: Frame) -> StreamUpdate:
         self.frames += 1
         t = frame.t
         pose = self._operator_pose(frame)
@@ -146,7 +231,8 @@ class StreamPipeline:
         xyz, vis = self.window.take()
         size = pose.image_size
         aspect = size[0] / size[1] if size else DATASET_ASPECT
-        probs = np.asarray(self.classifier.predict(xyz, vis, aspect=aspect))[0]
+        classifier = self._classifier
+        probs = np.asarray(classifier.predict(xyz, vis, aspect=aspect))[0]
         self.classifications += 1
         best = int(np.argmax(probs))
         withheld = self.evidence.withheld(vis[0])
@@ -154,7 +240,7 @@ class StreamPipeline:
             GestureEvent(
                 t=t,
                 stream=self.name,
-                gesture=self.classifier.labels[best],
+                gesture=classifier.labels[best],
                 confidence=round(float(probs[best]), 4),
                 probs=[round(float(p), 4) for p in probs],
                 withheld=withheld,
@@ -173,7 +259,12 @@ class StreamPipeline:
         return StreamUpdate(self.name, t, sight, action, decision.confidence)
 
     def close(self) -> None:
-        """Release the pose estimator, if one was made."""
+        """Release the pose estimator, if one was made; later swaps apply at once."""
+        with self._swap_guard:  # installs after the stream thread are all under the guard
+            self._closed = True
+            swap, self._swap = self._swap, None
+            if swap is not None:
+                self._install(swap, None)
         if self._pose_stage is not None:
             self._pose_stage.close()
             self._pose_stage = None

@@ -1,23 +1,42 @@
 """A federated run's parameters, one dataclass shared by the ServerApp, the ClientApp,
-the simulation and the deployment runner.
+the simulation, the deployment runner and the console.
 
-Flower passes run config as flat `key = value` pairs with hyphenated keys
-(`[tool.flwr.app.config]` in `flower-app/pyproject.toml`, overridable per run); the
-field `local_epochs` is the run-config key `local-epochs`. Every value is checked here,
-so a bad parameter stops a run before any drone trains, with the key named.
+Each field is declared once here with its bounds (pydantic `Field` constraints in the
+annotation): `FLConfig` checks them when built, the console's request schema
+(`proxima.api.schemas.TrainingStart`) uses the same annotated types, and the console's
+form reads them from `/api/config` (`field_schema`). Flower passes run config as flat
+`key = value` pairs with hyphenated keys (`[tool.flwr.app.config]` in
+`flower-app/pyproject.toml`, overridable per run; a test checks it equals the defaults
+here); the field `local_epochs` is the run-config key `local-epochs`. A bad parameter
+stops a run before any drone trains, with the key named.
 """
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
+from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Literal, get_args, get_origin, get_type_hints
 
-STRATEGIES = ("fedavg", "fedprox", "fedadam", "fedavgm")
-PARTITIONS = ("view", "iid", "dirichlet")
+from pydantic import ConfigDict, Field, TypeAdapter, ValidationError
+
+Strategy = Literal["fedavg", "fedprox", "fedadam", "fedavgm"]
+Partition = Literal["view", "iid", "dirichlet"]
+STRATEGIES: tuple[str, ...] = get_args(Strategy)
+PARTITIONS: tuple[str, ...] = get_args(Partition)
 VIEWS = ("f", "l", "r")
 VIEW_NAMES = {"f": "front", "l": "left", "r": "right"}
 APP_DIR = Path(__file__).resolve().parent / "flower-app"
+
+# The parameters a supervisor sets on the console's form, with their bounds.
+Rounds = Annotated[int, Field(ge=1, le=500, description="federated rounds")]
+LocalEpochs = Annotated[int, Field(ge=1, le=100, description="epochs each drone trains a round")]
+BatchSize = Annotated[int, Field(ge=1, le=4096, description="local batch size")]
+LearningRate = Annotated[float, Field(gt=0, le=1, description="local learning rate")]
+FractionFit = Annotated[float, Field(gt=0, le=1, description="share of drones asked per round")]
+MinClients = Annotated[int, Field(ge=1, le=100, description="drones a round waits for")]
+Positive = Annotated[float, Field(gt=0)]
+AtLeastOne = Annotated[int, Field(ge=1)]
 
 
 class ConfigError(ValueError):
@@ -26,36 +45,41 @@ class ConfigError(ValueError):
 
 @dataclass
 class FLConfig:
-    """Everything one federated run needs besides the drones themselves."""
+    """Everything one federated run needs besides the drones themselves.
 
-    rounds: int = 5
-    local_epochs: int = 1
-    batch_size: int = 64
-    learning_rate: float = 2e-3
-    lr_decay: float = 1.0  # local learning rate x lr_decay per round (1 = constant)
-    fraction_fit: float = 1.0
-    fraction_evaluate: float = 0.0  # federated evaluation of the global model on drones
-    min_clients: int = 2
-    strategy: str = "fedavg"
-    proximal_mu: float = 0.01  # FedProx only
-    server_learning_rate: float = 1.0  # FedAvgM only
-    server_eta: float = 1e-2  # FedAdam's server step size
-    server_momentum: float = 0.9  # FedAvgM only
-    partition: str = "view"
-    num_drones: int = 3
-    dirichlet_alpha: float = 0.5
+    Raises:
+        ConfigError: (constructor) a value of the wrong type or out of its bounds, named
+            by its run-config key.
+    """
+
+    rounds: Rounds = 5
+    local_epochs: LocalEpochs = 1
+    batch_size: BatchSize = 64
+    learning_rate: LearningRate = 2e-3
+    lr_decay: Annotated[float, Field(gt=0, le=1)] = 1.0  # local lr x lr_decay per round
+    fraction_fit: FractionFit = 1.0
+    fraction_evaluate: Annotated[float, Field(ge=0, le=1)] = 0.0  # federated evaluation
+    min_clients: MinClients = 2
+    strategy: Strategy = "fedavg"
+    proximal_mu: Annotated[float, Field(ge=0)] = 0.01  # FedProx only
+    server_learning_rate: Positive = 1.0  # FedAvgM only
+    server_eta: Positive = 1e-2  # FedAdam's server step size
+    server_momentum: Annotated[float, Field(ge=0, lt=1)] = 0.9  # FedAvgM only
+    partition: Partition = "view"
+    num_drones: AtLeastOne = 3
+    dirichlet_alpha: Positive = 0.5
     include_samples: bool = True
     model: str = "tcn"
     pipeline: str = "body"
-    stride: int = 4  # frames between training windows (as centralised training)
-    test_stride: int = 3  # frames between held-out test windows
-    max_gap: int = 5
-    patience: int = 12  # local early stopping (epochs without a better validation loss)
+    stride: AtLeastOne = 4  # frames between training windows (as centralised training)
+    test_stride: AtLeastOne = 3  # frames between held-out test windows
+    max_gap: Annotated[int, Field(ge=0)] = 5
+    patience: AtLeastOne = 12  # local early stopping (epochs without a better val loss)
     mirror: bool = False  # mirroring on the drones; no gain measured (docs/federated.md)
     seed: int = 0
-    threads: int = 1  # torch threads per client
-    round_timeout_s: float = 600.0  # a drone that has not answered by then is dropped
-    wait_timeout_s: float = 120.0  # how long to wait for `min_clients` drones
+    threads: AtLeastOne = 1  # torch threads per client
+    round_timeout_s: Positive = 600.0  # a drone that has not answered by then is dropped
+    wait_timeout_s: Positive = 120.0  # how long to wait for `min_clients` drones
     data: str = ""  # data folders for the held-out test set, ";"-separated ("" = default)
     run_id: str = ""
     db: str = ""  # SQLite file the ServerApp records rounds in ("" = nowhere)
@@ -65,50 +89,44 @@ class FLConfig:
         self.validate()
 
     def validate(self) -> None:
-        """Raises ConfigError naming the first bad key."""
-
-        def need(ok: bool, key: str, what: str) -> None:
-            if not ok:
-                raise ConfigError(f"run config {key!r}: {what} (got {getattr(self, key)!r})")
-
-        need(self.rounds >= 1, "rounds", "must be at least 1")
-        need(self.local_epochs >= 1, "local_epochs", "must be at least 1")
-        need(self.batch_size >= 1, "batch_size", "must be at least 1")
-        need(0 < self.learning_rate <= 1, "learning_rate", "must be in (0, 1]")
-        need(0 < self.lr_decay <= 1, "lr_decay", "must be in (0, 1]")
-        need(0 < self.fraction_fit <= 1, "fraction_fit", "must be in (0, 1]")
-        need(0 <= self.fraction_evaluate <= 1, "fraction_evaluate", "must be in [0, 1]")
-        need(self.min_clients >= 1, "min_clients", "must be at least 1")
-        need(self.strategy in STRATEGIES, "strategy", f"must be one of {', '.join(STRATEGIES)}")
-        need(self.proximal_mu >= 0, "proximal_mu", "must be >= 0")
-        need(self.server_learning_rate > 0, "server_learning_rate", "must be > 0")
-        need(self.server_eta > 0, "server_eta", "must be > 0")
-        need(0 <= self.server_momentum < 1, "server_momentum", "must be in [0, 1)")
-        need(self.partition in PARTITIONS, "partition", f"must be one of {', '.join(PARTITIONS)}")
-        need(self.num_drones >= 1, "num_drones", "must be at least 1")
-        need(self.dirichlet_alpha > 0, "dirichlet_alpha", "must be > 0")
-        need(self.stride >= 1, "stride", "must be at least 1")
-        need(self.test_stride >= 1, "test_stride", "must be at least 1")
-        need(self.max_gap >= 0, "max_gap", "must be >= 0")
-        need(self.patience >= 1, "patience", "must be at least 1")
-        need(self.threads >= 1, "threads", "must be at least 1")
-        need(self.round_timeout_s > 0, "round_timeout_s", "must be > 0")
-        need(self.wait_timeout_s > 0, "wait_timeout_s", "must be > 0")
-        need(
-            self.pipeline == "body",
-            "pipeline",
-            "only the scale-free 'body' pipeline is supported for federated runs: the "
-            "'paper' MinMax pipeline would scale each drone with statistics only it has",
-        )
+        """Check (and coerce, e.g. "3" -> 3) every field; raises ConfigError naming the
+        first bad key."""
+        for name, adapter in _adapters().items():
+            value = getattr(self, name)
+            if isinstance(value, bool) and _base_type(name) in (int, float):
+                raise ConfigError(f"run config {_key(name)!r}: expected a number, got {value!r}")
+            try:
+                setattr(self, name, adapter.validate_python(value))
+            except ValidationError as exc:
+                what = "; ".join(e["msg"] for e in exc.errors())
+                raise ConfigError(f"run config {_key(name)!r}: {what} (got {value!r})") from None
+        if self.pipeline != "body":
+            raise ConfigError(
+                f"run config 'pipeline': only the scale-free 'body' pipeline is supported for "
+                f"federated runs: the 'paper' MinMax pipeline would scale each drone with "
+                f"statistics only it has (got {self.pipeline!r})"
+            )
         from proxima.gesture.models import MODELS
 
-        need(self.model in MODELS, "model", f"must be one of {', '.join(MODELS)}")
+        if self.model not in MODELS:
+            raise ConfigError(
+                f"run config 'model': must be one of {', '.join(MODELS)} (got {self.model!r})"
+            )
+
+    @staticmethod
+    def field_schema(name: str) -> dict[str, Any]:
+        """The JSON schema of one field (type, bounds, choices), for forms.
+
+        Raises:
+            KeyError: no such field.
+        """
+        return _adapters()[name].json_schema()
 
     # Flower run config <-> dataclass -------------------------------------------------
 
     def to_run_config(self) -> dict[str, bool | int | float | str]:
         """Flat hyphenated keys, as `[tool.flwr.app.config]` and `flwr run -c` use."""
-        return {k.replace("_", "-"): v for k, v in asdict(self).items()}
+        return {_key(k): v for k, v in asdict(self).items()}
 
     @classmethod
     def from_run_config(cls, run_config: dict[str, Any]) -> FLConfig:
@@ -117,39 +135,40 @@ class FLConfig:
         Raises:
             ConfigError: an unknown key, a value of the wrong type, or a bad value.
         """
-        kinds = {f.name: f.type for f in fields(cls)}
+        known = {f.name for f in fields(cls)}
         values: dict[str, Any] = {}
         for key, value in run_config.items():
             name = key.replace("-", "_")
-            if name not in kinds:
+            if name not in known:
                 raise ConfigError(f"run config {key!r}: unknown key")
-            values[name] = _coerce(key, value, kinds[name])
+            values[name] = value
         return cls(**values)
 
     def data_specs(self) -> list[str] | None:
         return [s for s in self.data.split(";") if s] or None
 
 
-def _coerce(key: str, value: Any, kind: Any) -> Any:
-    kind = kind if isinstance(kind, str) else kind.__name__
-    try:
-        if kind == "bool":
-            if isinstance(value, bool):
-                return value
-            if isinstance(value, str) and value.lower() in ("true", "false", "1", "0"):
-                return value.lower() in ("true", "1")
-            raise ValueError
-        if kind == "int":
-            if isinstance(value, bool) or (isinstance(value, float) and not value.is_integer()):
-                raise ValueError
-            return int(value)
-        if kind == "float":
-            if isinstance(value, bool):
-                raise ValueError
-            return float(value)
-        return str(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"run config {key!r}: expected {kind}, got {value!r}") from None
+def _key(name: str) -> str:
+    """A field's run-config key (`local_epochs` -> `local-epochs`)."""
+    return name.replace("_", "-")
+
+
+@cache
+def _hints() -> dict[str, Any]:
+    return get_type_hints(FLConfig, include_extras=True)
+
+
+def _base_type(name: str) -> Any:
+    hint = _hints()[name]
+    return get_args(hint)[0] if get_origin(hint) is Annotated else hint
+
+
+@cache
+def _adapters() -> dict[str, TypeAdapter[Any]]:
+    """One validator per field, from its annotation (numbers given as text are accepted,
+    as `flwr run -c` may pass them)."""
+    lax = ConfigDict(coerce_numbers_to_str=True)
+    return {name: TypeAdapter(hint, config=lax) for name, hint in _hints().items()}
 
 
 def view_of(partition_id: int) -> str:

@@ -58,9 +58,9 @@ def config_from_params(params: dict[str, Any], base: FLConfig | None = None) -> 
 
 
 class FederatedRunner:
-    """Runs one federated run at a time, on Flower's deployment engine (a local SuperLink
-    with one SuperNode per drone, started on first use and kept) or its simulation
-    engine."""
+    """Runs one federated run at a time, on Flower's Deployment Runtime (a local
+    SuperLink with one SuperNode per drone, started on first use and kept) or its
+    Simulation Runtime (`flower_runtime`). The console's `TrainingRunner`."""
 
     def __init__(
         self,
@@ -70,18 +70,20 @@ class FederatedRunner:
         bus: EventBus | None = None,
         workdir: str | Path | None = None,
         drones: list[Drone] | None = None,
-        engine: str = "deployment",
+        flower_runtime: str = "deployment",
         defaults: FLConfig | None = None,
         samples_db: str | Path | None = None,
         poll_s: float = 0.5,
     ) -> None:
-        if engine not in ("deployment", "simulation"):
-            raise ValueError(f"engine must be deployment or simulation, got {engine!r}")
+        if flower_runtime not in ("deployment", "simulation"):
+            raise ValueError(
+                f"flower_runtime must be deployment or simulation, got {flower_runtime!r}"
+            )
         self.db_path = Path(db_path)
         self.store = TrainingStore(self.db_path)
         self.models_dir = Path(models_dir)
         self.bus = bus
-        self.engine = engine
+        self.flower_runtime = flower_runtime
         self.defaults = defaults or FLConfig()
         self.workdir = Path(workdir) if workdir else self.db_path.parent / "federated"
         self.samples_db = str(samples_db) if samples_db else str(self.db_path)
@@ -110,12 +112,13 @@ class FederatedRunner:
             cfg.run_id = new_run_id()
             cfg.db = str(self.db_path.resolve())
             cfg.models_dir = str(self.models_dir.resolve())
-            self.store.create_run(cfg.run_id, engine=self.engine, params=cfg.to_run_config(),
-                                  rounds_total=cfg.rounds,
+            self.store.create_run(cfg.run_id, engine=self.flower_runtime,
+                                  params=cfg.to_run_config(), rounds_total=cfg.rounds,
                                   started_by=str(params.get("started_by", "")))  # fmt: skip
             self._active = cfg.run_id
             self._stop.clear()
-            target = self._deployment_run if self.engine == "deployment" else self._simulation_run
+            deployment = self.flower_runtime == "deployment"
+            target = self._deployment_run if deployment else self._simulation_run
             self._thread = threading.Thread(target=self._guard, args=(target, cfg),
                                             name=f"fl-run-{cfg.run_id}", daemon=True)  # fmt: skip
             self._thread.start()
@@ -135,10 +138,10 @@ class FederatedRunner:
     # control -------------------------------------------------------------------------------
 
     def status(self) -> dict[str, Any]:
-        """Engine, active run, and (deployment) which Flower processes are alive."""
+        """Flower runtime, active run, and (deployment) which Flower processes are alive."""
         fed = self.federation
         return {
-            "engine": self.engine,
+            "engine": self.flower_runtime,
             "active_run": self._active if self.running else None,
             "superlink": fed.address if fed else None,
             "processes": fed.alive() if fed else {},

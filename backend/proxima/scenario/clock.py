@@ -29,11 +29,14 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from proxima.drone.events import CommandResultEvent
 from proxima.events import CommandEvent, EventBus
 from proxima.types import Event, Frame
+
+if TYPE_CHECKING:
+    from proxima.engine import Engine
 
 
 class FlightClock:
@@ -162,20 +165,17 @@ class FlightClock:
 
 
 def install_gate(
-    engine: Any,
+    engine: Engine,
     clock: FlightClock,
     last_t: Mapping[str, float],
     views: Mapping[str, Callable[[Frame], Frame]] | None = None,
 ) -> None:
     """Put `clock`'s gate (and the stream's camera view, if any) in front of every
-    stream of a started `proxima.engine.Engine`: each frame waits at the gate, is seen
-    through the view, then goes through the stream's own pipeline unchanged.
+    stream of `engine`, as a frame tap: each frame waits at the gate in its stream's
+    thread, is seen through the view, then goes on to recognition. Call it before
+    `engine.start()`, so the first frame is gated too.
 
     `last_t[name]` is the stream time of the stream's last frame, so the gate knows it.
-    The engine has no frame hook, so each pipeline's `process` is wrapped (as the
-    console's thumbnail tap does); a stream cannot decide anything before its 60-frame
-    window is full, so frames that may pass before the wrapper is in place change
-    nothing.
     """
     views = views or {}
     controller = engine.controller
@@ -183,21 +183,17 @@ def install_gate(
     def decided() -> float:
         return float(controller.now)
 
-    for name, pipeline in engine.pipelines.items():
-        original = pipeline.process
-        end = last_t.get(name, float("inf")) - 1e-6
-        view = views.get(name)
+    for spec in engine.specs:
+        end = last_t.get(spec.name, float("inf")) - 1e-6
+        view = views.get(spec.name)
 
-        def process(
+        def gate(
             frame: Frame,
-            _name: str = name,
-            _original: Callable[[Frame], Any] = original,
+            _name: str = spec.name,
             _view: Callable[[Frame], Frame] | None = view,
             _end: float = end,
-        ) -> Any:
+        ) -> Frame | None:
             clock.gate(_name, frame.t, decided, frame.t >= _end)
-            if _view is not None:
-                frame = _view(frame)
-            return _original(frame)
+            return _view(frame) if _view is not None else None
 
-        pipeline.process = process
+        engine.add_tap(spec.name, on_frame=gate)

@@ -225,9 +225,10 @@ class Rig:
         self._streaming = True
         for engine in engines:
             self.engines.append(engine)
-            engine.start()
-            views = {s: v.apply for s, v in self.views.items() if s in engine.pipelines}
+            names = {spec.name for spec in engine.specs}
+            views = {s: v.apply for s, v in self.views.items() if s in names}
             install_gate(engine, self.clock, last_t, views)
+            engine.start()
         while not all(e.wait(0.2) for e in engines):
             if progress:
                 progress("flight", self.clock.now(), duration_s)

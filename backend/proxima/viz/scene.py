@@ -82,7 +82,8 @@ class FleetView:
 
     def _static_scene(self) -> None:
         scene = self.server.scene
-        fence = self.settings.safety.geofence
+        safety = self.settings.safety
+        radius = safety.geofence_radius_m
         scene.set_up_direction("+z")
         # Stand a little behind and beside the operator, looking at where drones fly.
         ox, oy = self.settings.view.operator_position
@@ -90,22 +91,22 @@ class FleetView:
         self.server.initial_camera.look_at = (ox, oy - 3.0, 2.0)
         scene.add_grid(
             "/ground",
-            width=2 * fence.radius_m,
-            height=2 * fence.radius_m,
+            width=2 * radius,
+            height=2 * radius,
             cell_size=1.0,
             section_size=5.0,
         )
         scene.add_line_segments(
             "/geofence",
-            geofence_segments(fence.radius_m, fence.min_alt_m, fence.max_alt_m),
+            geofence_segments(radius, safety.min_altitude_m, safety.max_altitude_m),
             colors=COLORS["fence"],
             thickness=2.0,
             thickness_units="screen",
         )
         scene.add_label(
             "/geofence/label",
-            f"geofence r={fence.radius_m:g} m",
-            position=(fence.radius_m, 0.0, fence.max_alt_m / 2),
+            f"geofence r={radius:g} m",
+            position=(radius, 0.0, safety.max_altitude_m / 2),
         )
         base = self.model.operator_base
         scene.add_label("/operator/label", "operator", position=(base[0], base[1], 2.0))

@@ -165,20 +165,24 @@ function setStatus(text, cls = "") {
   s.className = `train-status ${cls}`;
 }
 
+// The form is drawn from `training_form` in /api/config: per field, the type, bounds and
+// choices of the backend's FLConfig and the runner's default, so it cannot drift from
+// what POST /training/runs accepts.
+const LABELS = { include_samples: "with labelled samples" };
+
+function formFields() {
+  return Object.entries(session.config.training_form || {});
+}
+
 async function startRun(ev) {
   ev.preventDefault();
   const f = new FormData(ev.target);
-  const body = {
-    rounds: Number(f.get("rounds")),
-    local_epochs: Number(f.get("local_epochs")),
-    batch_size: Number(f.get("batch_size")),
-    learning_rate: Number(f.get("learning_rate")),
-    fraction_fit: Number(f.get("fraction_fit")),
-    min_clients: Number(f.get("min_clients")),
-    strategy: f.get("strategy"),
-    partition: f.get("partition"),
-    include_samples: f.get("include_samples") === "on",
-  };
+  const body = {};
+  for (const [name, spec] of formFields()) {
+    if (spec.type === "boolean") body[name] = f.get(name) === "on";
+    else if (spec.enum) body[name] = f.get(name);
+    else body[name] = Number(f.get(name));
+  }
   try {
     const res = await api("/training/runs", { method: "POST", body });
     setStatus(`Run ${res.id} started.`, "ok");
@@ -190,16 +194,23 @@ async function startRun(ev) {
   }
 }
 
-function number(name, value, attrs = {}) {
-  const v = session.config.training_defaults?.[name] ?? value;
-  return el("label", {}, `${name.replace("_", " ")} `, el("input", { name, type: "number", value: String(v), ...attrs }));
-}
-
-function choice(name, options) {
-  const select = el("select", { name }, ...options.map((o) => el("option", { value: o, text: o })));
-  const v = session.config.training_defaults?.[name];
-  if (v) select.value = v;
-  return el("label", {}, `${name} `, select);
+function field(name, spec) {
+  if (spec.type === "boolean") {
+    const box = el("input", { name, type: "checkbox" });
+    box.checked = Boolean(spec.default);
+    return el("label", {}, box, ` ${LABELS[name] ?? name.replace("_", " ")}`);
+  }
+  if (spec.enum) {
+    const select = el("select", { name }, ...spec.enum.map((o) => el("option", { value: o, text: o })));
+    select.value = spec.default;
+    return el("label", {}, `${name} `, select);
+  }
+  const attrs = { name, type: "number", value: String(spec.default), step: spec.type === "integer" ? "1" : "any" };
+  const min = spec.minimum ?? spec.exclusiveMinimum;
+  const max = spec.maximum ?? spec.exclusiveMaximum;
+  if (min !== undefined) attrs.min = String(min);
+  if (max !== undefined) attrs.max = String(max);
+  return el("label", {}, `${name.replace("_", " ")} `, el("input", attrs));
 }
 
 export function mount(container) {
@@ -211,15 +222,7 @@ export function mount(container) {
     el(
       "div",
       { class: "row wrap" },
-      number("rounds", 5, { min: "1", max: "500" }),
-      number("local_epochs", 1, { min: "1", max: "100" }),
-      number("batch_size", 32, { min: "1" }),
-      number("learning_rate", 0.001, { step: "any", min: "0" }),
-      number("fraction_fit", 1, { step: "0.05", min: "0.05", max: "1" }),
-      number("min_clients", 2, { min: "1" }),
-      choice("strategy", ["fedavg", "fedprox", "fedadam", "fedavgm"]),
-      choice("partition", ["view", "iid", "dirichlet"]),
-      el("label", {}, el("input", { name: "include_samples", type: "checkbox", checked: "" }), " with labelled samples"),
+      ...formFields().map(([name, spec]) => field(name, spec)),
       el("button", { type: "submit", class: "start", text: "Start run" }),
     ),
     el("p", { class: "train-status" }),

@@ -3,36 +3,29 @@ user's role, the configured streams and drones."""
 
 from __future__ import annotations
 
+from dataclasses import asdict
 from typing import Any
 
 from fastapi import APIRouter, Request
 from fastapi.openapi.utils import get_openapi
 
 from proxima.api.deps import ConsoleDep, CurrentUser
+from proxima.api.interfaces import TrainingRunner
+from proxima.api.schemas import TRAINING_FORM
+from proxima.federated.config import FLConfig
 from proxima.types import GESTURES
 
 router = APIRouter(tags=["config"])
 
 
-TRAINING_FORM = (
-    "rounds",
-    "local_epochs",
-    "batch_size",
-    "learning_rate",
-    "fraction_fit",
-    "min_clients",
-    "strategy",
-    "partition",
-    "include_samples",
-)
-
-
-def _training_defaults(runner: Any) -> dict[str, Any]:
-    """The runner's defaults for the fields of the Training page's form."""
-    defaults = getattr(runner, "defaults", None)
-    if defaults is None:
-        return {}
-    return {k: getattr(defaults, k) for k in TRAINING_FORM if hasattr(defaults, k)}
+def _training_form(runner: TrainingRunner | None) -> dict[str, dict[str, Any]]:
+    """The Training page's form: each field's JSON schema (type, bounds, choices, from
+    `FLConfig`) and the runner's default for it."""
+    defaults = runner.defaults if runner is not None else FLConfig()
+    values = asdict(defaults)
+    return {
+        name: {**FLConfig.field_schema(name), "default": values[name]} for name in TRAINING_FORM
+    }
 
 
 @router.get("/config")
@@ -48,7 +41,7 @@ def get_config(user: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
         ],
         "drones": [d.name for d in s.drones],
         "training_available": console.training is not None,
-        "training_defaults": _training_defaults(console.training),
+        "training_form": _training_form(console.training),
         "estop_available": console.estop is not None,
     }
 
