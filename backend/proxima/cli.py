@@ -22,9 +22,9 @@ def _register_all() -> None:
     from proxima.engine import commands as engine_commands
 
     engine_commands.register(app)
-    from proxima.drone import commands as drone_commands
+    from proxima.drone import cli as drone_cli
 
-    drone_commands.register(app)
+    drone_cli.register(app)
     from proxima.api import commands as api_commands
 
     api_commands.register(app)

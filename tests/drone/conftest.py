@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from proxima.drone.mavlink_link import LinkConfig, MavlinkLink
+from proxima.drone.mavlink import LinkConfig, MavlinkLink
 from proxima.events import EventBus
 
 PROXIMA = str(Path(sys.executable).with_name("proxima"))

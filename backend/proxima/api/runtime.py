@@ -145,7 +145,7 @@ def federated_drones(settings: Settings) -> list[Any] | None:
 
 def _start_drones(settings: Settings, bus: EventBus, db: Engine, rt: ConsoleRuntime) -> Any:
     from proxima.drone.controller import DroneController, EmergencyStopService
-    from proxima.drone.mavlink_link import MavlinkLink
+    from proxima.drone.mavlink import MavlinkLink
     from proxima.drone.safety import SafetyConfig
     from proxima.store.command_log import CommandLog
 
