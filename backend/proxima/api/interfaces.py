@@ -11,10 +11,6 @@ from __future__ import annotations
 from typing import Any, Protocol, runtime_checkable
 
 
-class Unavailable(RuntimeError):
-    """The subsystem behind a route is not running in this process."""
-
-
 @runtime_checkable
 class TrainingRunner(Protocol):
     """Starts federated runs and reports them. Runs publish per-round metrics on the bus;

@@ -53,7 +53,7 @@ class MemoryLink(MavlinkActions):
         self.clock: Clock = clock or WallClock()
         self._lock = threading.RLock()
         self._t = self.clock.now()  # the vehicle's time: physics have run up to here
-        self.vehicle = Vehicle(self.sim, clock=lambda: self._t, on_text=self._on_text)
+        self._vehicle = Vehicle(self.sim, clock=lambda: self._t, on_text=self._on_text)
         self._state = LinkState.CONNECTING
         self._closed_flag = False
         self._setpoint: Setpoint | None = None
@@ -63,6 +63,13 @@ class MemoryLink(MavlinkActions):
         self._status_text = ""
         self.sent: list[dict[str, Any]] = []
         self.sent_counts: Counter[str] = Counter()
+
+    @property
+    def vehicle(self) -> Vehicle:
+        """The simulated vehicle itself, its physics run up to the clock's time."""
+        with self._lock:
+            self._advance()
+            return self._vehicle
 
     # --- life cycle -------------------------------------------------------------------
     def connect(self, timeout: float = 10.0) -> None:
@@ -121,7 +128,7 @@ class MemoryLink(MavlinkActions):
 
     # --- the transport primitives -------------------------------------------------------
     def _policy(self) -> Autopilot:
-        return for_heartbeat(self.vehicle.fw.mav_autopilot)
+        return for_heartbeat(self._vehicle.fw.mav_autopilot)
 
     def _vehicle_type(self) -> int:
         return mav.MAV_TYPE_QUADROTOR
@@ -151,7 +158,7 @@ class MemoryLink(MavlinkActions):
             self._advance()
             t0 = time.perf_counter()
             self._record(sent)
-            result = vehicle_command(self.vehicle, command, params)
+            result = vehicle_command(self._vehicle, command, params)
             latency = time.perf_counter() - t0
         if result is None:  # telemetry is read from the vehicle itself: no rates to set
             return CommandResult(
@@ -186,7 +193,7 @@ class MemoryLink(MavlinkActions):
     def _echo(self) -> tuple[float, tuple[float, float, float] | None]:
         with self._lock:
             self._advance()
-            target = self.vehicle.reported_target()
+            target = self._vehicle.reported_target()
         return (self.clock.now(), target) if target is not None else (0.0, None)
 
     def _acknowledged(self, **fields: Any) -> None:
@@ -195,14 +202,14 @@ class MemoryLink(MavlinkActions):
     # --- the vehicle --------------------------------------------------------------------
     def _advance(self) -> None:
         """Run the physics (and the setpoint stream) up to the clock's time."""
-        dt = 1.0 / self.sim.physics_hz
+        dt, interval = 1.0 / self.sim.physics_hz, 1.0 / self.cfg.setpoint_hz
         until = self.clock.now()
         while self._t + dt <= until + 1e-9:
             self._t += dt
-            if self._setpoint is not None and self._t >= self._next_setpoint:
+            if self._setpoint is not None and self._t + 1e-9 >= self._next_setpoint:
                 self._put(self._setpoint)
-                self._next_setpoint = self._t + 1.0 / self.cfg.setpoint_hz
-            self.vehicle.step(dt)
+                self._next_setpoint = max(self._next_setpoint + interval, self._t)
+            self._vehicle.step(dt)
 
     def _put(self, sp: Setpoint) -> None:
         """One SET_POSITION_TARGET_LOCAL_NED to the vehicle (none while the link is lost)."""
@@ -218,7 +225,7 @@ class MemoryLink(MavlinkActions):
                 "yaw": sp.yaw,
             }
         )
-        self.vehicle.position_target(
+        self._vehicle.position_target(
             mav.MAV_FRAME_LOCAL_NED, sp.type_mask, sp.position, (0.0, 0.0, 0.0), sp.yaw or 0.0
         )
         sp.sent_at = self._t
@@ -232,7 +239,7 @@ class MemoryLink(MavlinkActions):
 
     def _snapshot(self) -> Telemetry:
         self._advance()
-        v = self.vehicle
+        v = self._vehicle
         target = v.reported_target()
         if target is not None:
             self._last_target = target  # like a link, the last reported target stays
