@@ -39,7 +39,8 @@ from rich.progress import Progress
 
 from proxima.drone.controller import DroneController
 from proxima.drone.link import Telemetry
-from proxima.drone.mavlink_link import MavlinkLink, mav
+from proxima.drone.mavlink import MavlinkLink
+from proxima.drone.mavlink.protocol import mav
 from proxima.drone.safety import SafetyConfig
 from proxima.events import CommandEvent
 from proxima.store.command_log import CommandLog

@@ -25,9 +25,9 @@ def _register_all() -> None:
     from proxima.engine import cli as engine_cli
 
     engine_cli.register(app)
-    from proxima.drone import commands as drone_commands
+    from proxima.drone import cli as drone_cli
 
-    drone_commands.register(app)
+    drone_cli.register(app)
     from proxima.api import cli as api_cli
 
     api_cli.register(app)

@@ -1,5 +1,6 @@
 """Fixtures for the drone tests: `proxima sim-drone` as a real subprocess on a free UDP
-port of 127.0.0.1, and MAVLink links to it; everything started is stopped by PID."""
+port of 127.0.0.1 and MAVLink links to it (everything started is stopped by PID), and
+in-memory links to the same simulated vehicle on a manual clock."""
 
 from __future__ import annotations
 
@@ -7,18 +8,23 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from proxima.drone.mavlink_link import LinkConfig, MavlinkLink
+from proxima.drone.mavlink import LinkConfig, MavlinkLink
+from proxima.drone.memory import ManualClock, MemoryLink
+from proxima.drone.sim import SimConfig, VehicleServer
 from proxima.events import EventBus
 
 PROXIMA = str(Path(sys.executable).with_name("proxima"))
 # Fast but realistic limits, so a whole flight fits in a few seconds of real time.
 FAST = ("--max-accel", "8", "--max-climb", "4", "--land-speed", "3")
+FAST_SIM = {"max_accel": 8.0, "max_climb": 4.0, "land_speed": 3.0}  # the same, in-memory
 
 
 def free_udp_port() -> int:
@@ -48,7 +54,21 @@ class Sim:
             return self.proc.wait()
 
 
+@dataclass
+class InProcessSim:
+    """A `VehicleServer` (what `proxima sim-drone` runs) on a thread of the test."""
+
+    server: VehicleServer
+    thread: threading.Thread
+    stop: threading.Event
+
+    @property
+    def connection(self) -> str:
+        return f"udpin:127.0.0.1:{self.server.cfg.port}"
+
+
 StartSim = Callable[..., Sim]
+ServeSim = Callable[..., InProcessSim]
 Connect = Callable[..., MavlinkLink]
 
 
@@ -92,11 +112,35 @@ def start_sim() -> Iterator[Callable[..., Sim]]:
 
 
 @pytest.fixture
+def serve_sim() -> Iterator[Callable[..., InProcessSim]]:
+    """Simulated vehicles over real UDP without a process start: the same server as
+    `proxima sim-drone`, on a thread, with the FAST_SIM limits by default."""
+    sims: list[InProcessSim] = []
+
+    def serve(sysid: int = 1, **sim: Any) -> InProcessSim:
+        cfg = SimConfig(port=free_udp_port(), sysid=sysid, **{**FAST_SIM, **sim})
+        server, stop = VehicleServer(cfg), threading.Event()
+        thread = threading.Thread(target=server.run, args=(stop,), daemon=True)
+        thread.start()
+        sims.append(InProcessSim(server, thread, stop))
+        return sims[-1]
+
+    yield serve
+    for sim in sims:
+        sim.stop.set()
+        sim.thread.join(timeout=5.0)
+    assert not any(sim.thread.is_alive() for sim in sims)
+
+
+@pytest.fixture
 def connect() -> Iterator[Callable[..., MavlinkLink]]:
     links: list[MavlinkLink] = []
 
     def open_link(
-        sim: Sim, name: str = "alpha", bus: EventBus | None = None, config: LinkConfig | None = None
+        sim: Sim | InProcessSim,
+        name: str = "alpha",
+        bus: EventBus | None = None,
+        config: LinkConfig | None = None,
     ) -> MavlinkLink:
         link = MavlinkLink(sim.connection, name, bus=bus, config=config)
         links.append(link)
@@ -107,3 +151,25 @@ def connect() -> Iterator[Callable[..., MavlinkLink]]:
     yield open_link
     for link in links:
         link.close()
+
+
+MemoryLinks = Callable[..., MemoryLink]
+
+
+@pytest.fixture
+def clock() -> ManualClock:
+    """Time that passes only when the test says so."""
+    return ManualClock()
+
+
+@pytest.fixture
+def memory_link(clock: ManualClock) -> Callable[..., MemoryLink]:
+    """Connected in-memory links on the test's clock (with FAST_SIM limits by default)."""
+
+    def make(name: str = "alpha", autopilot: str = "ardupilot", **sim: Any) -> MemoryLink:
+        cfg = SimConfig(autopilot=autopilot, **{**FAST_SIM, **sim})
+        link = MemoryLink(name, cfg, clock=clock)
+        link.connect()
+        return link
+
+    return make

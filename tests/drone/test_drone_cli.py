@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import typer
 from typer.testing import CliRunner
 
-from proxima.drone.commands import register
+from proxima.drone.cli import register
 
 if TYPE_CHECKING:
     from conftest import StartSim

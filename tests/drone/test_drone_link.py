@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 from proxima.drone.controller import DroneController
 from proxima.drone.events import CommandResultEvent, DroneAlarmEvent
-from proxima.drone.mavlink_link import LinkConfig
+from proxima.drone.mavlink import LinkConfig
 from proxima.events import ActionEvent, ArmingEvent, CommandEvent, EventBus, Subscription
 from proxima.store.command_log import CommandLog
 from proxima.types import LinkState

@@ -13,10 +13,6 @@ from typing import Any, Protocol, runtime_checkable
 from proxima.federated.config import FLConfig
 
 
-class Unavailable(RuntimeError):
-    """The subsystem behind a route is not running in this process."""
-
-
 @runtime_checkable
 class TrainingRunner(Protocol):
     """Starts federated runs and reports them. Runs publish per-round metrics on the bus;

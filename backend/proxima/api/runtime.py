@@ -139,7 +139,7 @@ def federated_drones(settings: Settings) -> list[Any] | None:
 
 def _start_drones(settings: Settings, bus: EventBus, db: DbEngine, rt: ConsoleRuntime) -> Any:
     from proxima.drone.controller import DroneController, EmergencyStopService
-    from proxima.drone.mavlink_link import MavlinkLink
+    from proxima.drone.mavlink import MavlinkLink
     from proxima.store.command_log import CommandLog
 
     for d in settings.drones:

@@ -97,7 +97,7 @@ class Demo:
     def _take_off(self) -> None:
         """Pre-flight for the simulators the demo started (never for a real vehicle): a
         link of its own connects, takes off to hover and lets go of the port."""
-        from proxima.drone.mavlink_link import MavlinkLink
+        from proxima.drone.mavlink import MavlinkLink
 
         errors: list[str] = []
 

@@ -1,8 +1,9 @@
-"""The drone link: MAVLink to ArduPilot/PX4 vehicles, the simulated quadcopter, the
-gesture -> command mapping and the flight-safety rules (see docs/drone.md).
+"""The drones: the DroneLink interface and its backends, the simulated quadcopter, the
+gesture -> command mapping, the flight-safety rules and the controller (see docs/drone.md).
 
-Modules: `link` (the DroneLink interface), `mavlink_link` (pymavlink implementation),
-`sim_vehicle` (`proxima sim-drone`), `mapping` (+ `mapping.toml`), `safety`,
-`controller` (CommandEvent -> vehicle, with the command log), `events`, `commands` (CLI).
-Nothing is imported here, so `proxima --help` stays fast.
+`link` (DroneLink, Telemetry, CommandResult), `events`, `mapping` (+ `mapping.toml`),
+`safety`, `controller/` (CommandEvent -> vehicle, with the command log), `mavlink/` (the
+MAVLink backend), `memory/` (the in-process backend for tests), `sim/` (`proxima
+sim-drone`), `cli` (the `sim-drone` and `drone-cmd` commands). Nothing is imported here,
+so `proxima --help` stays fast.
 """

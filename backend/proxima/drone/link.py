@@ -1,8 +1,10 @@
 """The `DroneLink` interface: one connected vehicle, its link state, telemetry and commands.
 
-Only the MAVLink implementation exists today (`mavlink_link.MavlinkLink`); the interface
-keeps pymavlink out of the controller, the safety rules and the console. Every command
-returns a `CommandResult` that says what the vehicle answered; nothing is assumed.
+Implementations: `mavlink.MavlinkLink` (MAVLink 2 over pymavlink, to a real vehicle, SITL
+or `proxima sim-drone`) and `memory.MemoryLink` (the same commands to a simulated
+vehicle inside this process, for tests). The interface keeps pymavlink out of the
+controller, the safety rules and the console. Every command returns a `CommandResult`
+that says what the vehicle answered; nothing is assumed.
 """
 
 from __future__ import annotations
@@ -103,6 +105,7 @@ class DroneLink(ABC):
     until the vehicle answered or the retries ran out."""
 
     name: str
+    gesture_control: bool = False  # set by the controller; shown in the link's state
 
     @abstractmethod
     def connect(self, timeout: float = 10.0) -> None:
@@ -125,6 +128,16 @@ class DroneLink(ABC):
     @abstractmethod
     def telemetry(self) -> Telemetry | None:
         """The newest telemetry, or None before the first heartbeat."""
+
+    @abstractmethod
+    def guided_mode(self) -> str:
+        """The vehicle's name for the mode that follows external position targets
+        (ArduPilot GUIDED, PX4 OFFBOARD)."""
+
+    @abstractmethod
+    def holding_modes(self) -> frozenset[str]:
+        """The vehicle's modes in which it only holds its position: from these, and only
+        these, a gesture may take it into `guided_mode()`."""
 
     @abstractmethod
     def set_mode(self, mode: str) -> CommandResult:

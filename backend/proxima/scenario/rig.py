@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from proxima.drone.controller import DroneController
-from proxima.drone.mavlink_link import MavlinkLink
+from proxima.drone.mavlink import MavlinkLink
 from proxima.drone.safety import SafetyConfig, SafetyGate
 from proxima.events import EventBus
 from proxima.pose import operator_visible

@@ -13,7 +13,7 @@ if TYPE_CHECKING:
     from rich.console import Console
 
     from proxima.drone.link import CommandResult, Telemetry
-    from proxima.drone.mavlink_link import MavlinkLink
+    from proxima.drone.mavlink import MavlinkLink
 
 DRONE_ACTIONS = (
     "status",
@@ -65,7 +65,7 @@ def sim_drone(
     import signal
     import threading
 
-    from proxima.drone.sim_vehicle import SimConfig, SimVehicle
+    from proxima.drone.sim import SimConfig, VehicleServer
 
     if not 1 <= port <= 65535:
         raise typer.BadParameter(f"--port must be 1..65535, got {port}")
@@ -104,7 +104,7 @@ def sim_drone(
         loss=loss,
         seed=seed,
     )
-    vehicle = SimVehicle(cfg)
+    vehicle = VehicleServer(cfg)
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
@@ -138,7 +138,7 @@ def drone_cmd(
     from rich.console import Console
 
     from proxima.drone.link import LinkError
-    from proxima.drone.mavlink_link import MavlinkLink
+    from proxima.drone.mavlink import MavlinkLink
 
     console = Console(stderr=True)
     values = list(args or [])
