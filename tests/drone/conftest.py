@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from drone_helpers import FAST, FAST_SIM
 
 from proxima.drone.mavlink import LinkConfig, MavlinkLink
 from proxima.drone.memory import ManualClock, MemoryLink
@@ -22,9 +23,6 @@ from proxima.drone.sim import SimConfig, VehicleServer
 from proxima.events import EventBus
 
 PROXIMA = str(Path(sys.executable).with_name("proxima"))
-# Fast but realistic limits, so a whole flight fits in a few seconds of real time.
-FAST = ("--max-accel", "8", "--max-climb", "4", "--land-speed", "3")
-FAST_SIM = {"max_accel": 8.0, "max_climb": 4.0, "land_speed": 3.0}  # the same, in-memory
 
 
 def free_udp_port() -> int:

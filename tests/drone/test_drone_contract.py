@@ -18,7 +18,7 @@ from proxima.drone.sim import SimConfig
 if TYPE_CHECKING:
     from conftest import Connect, ServeSim
 
-from conftest import FAST_SIM
+from drone_helpers import FAST_SIM
 
 AUTOPILOTS = ("ardupilot", "px4")
 QUICK = {**FAST_SIM, "position_gain": 6.0}  # a snappier final approach: a shorter test
