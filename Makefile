@@ -32,6 +32,15 @@ $(FRONT_STAMP): $(FRONT_SRC)
 demo: install frontend
 	$(BIN)/proxima demo
 
+# The README's and docs/console.md's pictures: the browser tests save them under
+# runs/screenshots/ (ignored, so `make test` leaves the tree clean); this reruns those
+# tests and copies the pictures over docs/screenshots/.
+.PHONY: screenshots
+screenshots: install frontend
+	rm -rf runs/screenshots
+	$(BIN)/python -m pytest -q tests/ui
+	cp runs/screenshots/*.png docs/screenshots/
+
 lint: install
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .

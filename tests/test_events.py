@@ -1,10 +1,17 @@
 from __future__ import annotations
 
+import ast
 import json
 import threading
 import time
+from dataclasses import fields
+from pathlib import Path
 
-from proxima.events import CommandEvent, EventBus, GestureEvent, PoseEvent
+import pytest
+
+import proxima
+from proxima.events import EVENT_TYPES, CommandEvent, EventBus, GestureEvent, PoseEvent
+from proxima.types import Event
 
 
 def test_subscribers_get_their_types_in_order() -> None:
@@ -52,3 +59,42 @@ def test_events_serialise_to_json_with_type_and_time() -> None:
         "type": "command", "t": 1.25, "stream": "left", "command": "move_to_left",
         "drone": "main",
     }  # fmt: skip
+
+
+def _source() -> list[ast.AST]:
+    return [
+        ast.parse(path.read_text(encoding="utf-8"))
+        for path in Path(proxima.__file__).parent.rglob("*.py")
+    ]
+
+
+def test_one_registry_lists_every_event_type() -> None:
+    bases = {"Event", *(cls.__name__ for cls in EVENT_TYPES.values())}
+    defined = {
+        node.name
+        for tree in _source()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.ClassDef)
+        and any(isinstance(b, ast.Name) and b.id in bases for b in node.bases)
+    }
+    assert defined == {cls.__name__ for cls in EVENT_TYPES.values()}
+    for name, cls in EVENT_TYPES.items():
+        assert issubclass(cls, Event) and cls.type == name
+        assert "type" not in {f.name for f in fields(cls) if f.init}  # fixed per class
+
+
+def test_subscribing_to_a_type_nobody_publishes_is_refused() -> None:
+    bus = EventBus()
+    with pytest.raises(ValueError, match="no event type 'fl_round'"):
+        bus.subscribe(types=["training_round", "fl_round"])
+    bus.subscribe(types=["training_round"]).close()
+
+
+def test_every_event_type_has_a_publisher() -> None:
+    made = {
+        node.func.id
+        for tree in _source()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+    }
+    assert {cls.__name__ for cls in EVENT_TYPES.values()} <= made

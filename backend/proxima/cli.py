@@ -1,5 +1,5 @@
 """The `proxima` command. Each subsystem registers its own subcommands from a small CLI
-module (`cli.py`; some are still named `commands.py`) that imports heavy libraries
+module (`cli.py`; the drone package's is still `commands.py`) that imports heavy libraries
 (torch, mediapipe, flwr) only inside the command bodies, so `proxima --help` stays fast."""
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ app = typer.Typer(
 
 def _register_all() -> None:
     # One line per subsystem; order is the order in `--help`.
-    from proxima.gesture import commands as gesture_commands
+    from proxima.gesture import cli as gesture_cli
 
-    gesture_commands.register(app)
+    gesture_cli.register(app)
     from proxima.evaluation import cli as evaluation_cli
 
     evaluation_cli.register(app)
@@ -31,15 +31,15 @@ def _register_all() -> None:
     from proxima.api import cli as api_cli
 
     api_cli.register(app)
-    from proxima.federated import commands as federated_commands
+    from proxima.federated import cli as federated_cli
 
-    federated_commands.register(app)
-    from proxima.scenario import commands as scenario_commands
+    federated_cli.register(app)
+    from proxima.scenario import cli as scenario_cli
 
-    scenario_commands.register(app)
-    from proxima.demo import commands as demo_commands
+    scenario_cli.register(app)
+    from proxima.demo import cli as demo_cli
 
-    demo_commands.register(app)
+    demo_cli.register(app)
 
 
 _register_all()

@@ -1,18 +1,28 @@
-"""Typed events and the in-process bus that carries them.
+"""Typed events, the one registry of their types, and the in-process bus that carries
+them.
 
 Every stage on the frame -> command path publishes here; the console, the JSONL writer
 and the logs subscribe. Publishing never blocks: each subscriber has its own bounded
 queue and, when it falls behind, loses its oldest events (counted in `dropped`), so a
 slow browser can never stall recognition.
+
+The recognition events are defined here; the drone link's, the federated runner's and
+the console's own are in `drone/events.py`, `federated/events.py` and `api/events.py`.
+`EVENT_TYPES` lists them all by their `type`: subscribing to a name missing from it is
+an error, and the browser's types are generated from it (`python -m proxima.api.typegen`).
 """
 
 from __future__ import annotations
 
 import threading
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
+from proxima.api.events import RecordingEvent, ThumbnailEvent
+from proxima.drone.events import CommandResultEvent, DroneAlarmEvent, DroneStateEvent
+from proxima.federated.events import TrainingRoundEvent, TrainingRunEvent
 from proxima.types import Event
 
 
@@ -83,6 +93,51 @@ class StreamEvent(Event):
     type: str = field(default="stream", init=False)
 
 
+def _registry(*classes: type[Event]) -> Mapping[str, type[Event]]:
+    by_name: dict[str, type[Event]] = {}
+    for cls in classes:
+        if cls.type in by_name:
+            raise TypeError(
+                f"{cls.__name__} and {by_name[cls.type].__name__} share the type {cls.type!r}"
+            )
+        by_name[cls.type] = cls
+    return MappingProxyType(by_name)
+
+
+# Every event type on the bus, by its `type` (also the WebSocket message's `type`).
+EVENT_TYPES: Mapping[str, type[Event]] = _registry(
+    PoseEvent,
+    GestureEvent,
+    ActionEvent,
+    ArmingEvent,
+    HandoverEvent,
+    CommandEvent,
+    StreamEvent,
+    DroneStateEvent,
+    CommandResultEvent,
+    DroneAlarmEvent,
+    TrainingRoundEvent,
+    TrainingRunEvent,
+    RecordingEvent,
+    ThumbnailEvent,
+)
+
+
+def check_types(types: Iterable[str]) -> frozenset[str]:
+    """`types` as a set, each checked against `EVENT_TYPES`.
+
+    Raises:
+        ValueError: a name no event has (a subscriber that would never get anything).
+    """
+    names = frozenset(types)
+    unknown = sorted(names - EVENT_TYPES.keys())
+    if unknown:
+        raise ValueError(
+            f"no event type {', '.join(map(repr, unknown))}; known: {sorted(EVENT_TYPES)}"
+        )
+    return names
+
+
 class Subscription:
     """A subscriber's bounded queue. Iterate it, or call `get`, from any thread."""
 
@@ -137,8 +192,12 @@ class EventBus:
         self._listeners: list[Callable[[Event], None]] = []
 
     def subscribe(self, maxsize: int = 1000, types: Iterable[str] | None = None) -> Subscription:
-        """A queue of future events (only of `types`, if given)."""
-        sub = Subscription(self, maxsize, frozenset(types) if types else None)
+        """A queue of future events (only of `types`, if given).
+
+        Raises:
+            ValueError: a name in `types` that is no event type (see `EVENT_TYPES`).
+        """
+        sub = Subscription(self, maxsize, check_types(types) if types else None)
         with self._lock:
             self._subs.append(sub)
         return sub

@@ -1,3 +1,4 @@
+// @ts-check
 // Drawing MediaPipe's 33-landmark BlazePose skeleton on a canvas. Landmarks are in
 // normalised image coordinates (x right, y down, 0..1, may leave the image).
 
@@ -11,6 +12,13 @@ export const CONNECTIONS = [
 // The operator's left side (odd indices above 10) and right side in two colours.
 const LEFT = new Set([11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31]);
 
+/**
+ * @param {CanvasRenderingContext2D} ctx
+ * @param {number[][]} xyz 33 landmarks [x, y, z]
+ * @param {number[] | null} visibility 33 values in [0, 1], or none (all drawn as seen)
+ * @param {number} w
+ * @param {number} h
+ */
 export function drawSkeleton(ctx, xyz, visibility, w, h, { alpha = 1 } = {}) {
   if (!xyz || xyz.length !== 33) return;
   ctx.save();
@@ -36,6 +44,7 @@ export function drawSkeleton(ctx, xyz, visibility, w, h, { alpha = 1 } = {}) {
   ctx.restore();
 }
 
+/** @param {CanvasRenderingContext2D} ctx @param {number} w @param {number} h */
 export function clear(ctx, w, h) {
   ctx.fillStyle = "#101418";
   ctx.fillRect(0, 0, w, h);

@@ -1,86 +1,126 @@
-// The browser's picture of the live system, kept from WebSocket events whatever page is
-// shown. Pages read it and redraw what changed (`version` counters).
+// @ts-check
+// The browser's picture of the live system, kept whatever page is shown. A stream's
+// state is the server's own (`StreamLive`, reduced from the bus in api/live.py): it comes
+// whole in `hello` and again in a `stream_live` message each time it changes, and is
+// never recomputed here. What this module adds is what only the browser needs: the newest
+// pose and thumbnail per stream to draw, the command log with each command's outcome, and
+// the alarms. Pages read it and redraw what changed (`version`, `dirty`).
 import { on } from "./ws.js";
 
+/** @typedef {import("./types.gen.js").StreamLive} StreamLive */
+/** @typedef {import("./types.gen.js").DroneStateEvent} DroneStateEvent */
+/** @typedef {import("./types.gen.js").CommandResultEvent} CommandResultEvent */
+/** @typedef {import("./types.gen.js").DroneAlarmEvent} DroneAlarmEvent */
+/** @typedef {import("./types.gen.js").MessageMap["pose"]} PoseMessage */
+
+/**
+ * A stream: configuration and state from the server, and what the Live page draws.
+ * @typedef {object} StreamRecord
+ * @property {string} name
+ * @property {string} drone
+ * @property {number} priority
+ * @property {string} kind
+ * @property {string} uri
+ * @property {boolean} driving
+ * @property {StreamLive} live
+ * @property {PoseMessage | null} pose the newest pose
+ * @property {number} poseCount
+ * @property {HTMLImageElement | null} thumb the newest thumbnail
+ * @property {boolean} dirty pose or thumbnail changed since the tile was drawn
+ */
+
+/**
+ * A drone: the streams that command it and its newest telemetry.
+ * @typedef {object} DroneRecord
+ * @property {string} name
+ * @property {string[]} streams
+ * @property {DroneStateEvent | null} state
+ */
+
+/**
+ * A command-log row: a decided command and what became of it (`result`), or a result
+ * whose command this page never saw.
+ * @typedef {object} CommandRow
+ * @property {number} t
+ * @property {number} ts
+ * @property {string} stream
+ * @property {string} drone
+ * @property {string} command
+ * @property {CommandResultEvent | null} result
+ */
+
+const MAX_COMMANDS = 200;
+const MAX_ALARMS = 50;
+
 export const state = {
-  streams: new Map(), // name -> stream record (see ensureStream)
-  drones: new Map(), // name -> {name, streams, state: {...drone_state}}
-  commands: [], // newest first: {t, stream, drone, command, wall, result}
-  alarms: [], // newest first
-  drivingStream: null,
+  /** @type {Map<string, StreamRecord>} */
+  streams: new Map(),
+  /** @type {Map<string, DroneRecord>} */
+  drones: new Map(),
+  /** @type {CommandRow[]} newest first */
+  commands: [],
+  /** @type {DroneAlarmEvent[]} newest first */
+  alarms: [],
   version: 0, // bumped on any change outside pose/thumbnail
-  listeners: new Set(),
 };
 
 function changed() {
   state.version += 1;
-  for (const fn of state.listeners) fn();
 }
 
-export function subscribe(fn) {
-  state.listeners.add(fn);
-  return () => state.listeners.delete(fn);
-}
-
-function ensureStream(name) {
-  let s = state.streams.get(name);
+/**
+ * The stream's record, made from its configuration if new.
+ * @param {{name: string, drone?: string, priority?: number, kind?: string, uri?: string}} config
+ * @param {StreamLive} live
+ * @returns {StreamRecord}
+ */
+function putStream(config, live) {
+  let s = state.streams.get(config.name);
   if (!s) {
     s = {
-      name,
-      drone: "",
-      priority: state.streams.size,
-      kind: "unknown",
-      live: {},
+      name: config.name,
+      drone: config.drone ?? "",
+      priority: config.priority ?? state.streams.size,
+      kind: config.kind ?? "unknown",
+      uri: config.uri ?? "",
+      driving: false,
+      live,
       pose: null,
       poseCount: 0,
       thumb: null,
       dirty: true,
     };
-    state.streams.set(name, s);
+    state.streams.set(config.name, s);
   }
+  s.live = live;
   return s;
-}
-
-function ensureDrone(name) {
-  let d = state.drones.get(name);
-  if (!d) {
-    d = { name, streams: [], state: {}, driving: false };
-    state.drones.set(name, d);
-  }
-  return d;
 }
 
 on("hello", (msg) => {
   state.streams.clear();
-  for (const s of msg.streams) {
-    const rec = ensureStream(s.name);
-    Object.assign(rec, {
-      drone: s.drone,
-      priority: s.priority,
-      kind: s.kind,
-      uri: s.uri,
-      live: { ...s.live },
-    });
-    if (s.driving) state.drivingStream = s.name;
-  }
+  for (const s of msg.streams) putStream(s, s.live).driving = s.driving;
   state.drones.clear();
-  for (const d of msg.drones) {
-    Object.assign(ensureDrone(d.name), { streams: d.streams, state: d.state || {} });
-  }
-  state.commands = (msg.commands || []).slice();
+  for (const d of msg.drones) state.drones.set(d.name, { name: d.name, streams: d.streams, state: d.state });
+  state.commands = msg.commands.map((c) => ({ ...c, result: null }));
+  changed();
+});
+
+on("stream_live", (msg) => {
+  putStream({ name: msg.stream }, msg.live).driving = msg.driving;
   changed();
 });
 
 on("pose", (msg) => {
-  const s = ensureStream(msg.stream);
+  const s = state.streams.get(msg.stream); // drawn once its state has arrived
+  if (!s) return;
   s.pose = msg;
   s.poseCount += 1;
-  s.live.sight = msg.sight;
   s.dirty = true;
 });
 
 on("thumbnail", (msg) => {
-  const s = ensureStream(msg.stream);
+  const s = state.streams.get(msg.stream);
+  if (!s) return;
   const img = new Image();
   img.onload = () => {
     s.thumb = img;
@@ -89,54 +129,40 @@ on("thumbnail", (msg) => {
   img.src = `data:image/jpeg;base64,${msg.jpeg_b64}`;
 });
 
-const liveFields = {
-  gesture: (s, m) =>
-    Object.assign(s.live, { gesture: m.gesture, gesture_confidence: m.confidence, withheld: m.withheld || [] }),
-  action: (s, m) => Object.assign(s.live, { action: m.action, action_confidence: m.confidence }),
-  arming: (s, m) => Object.assign(s.live, { armed: m.armed, arming_reason: m.reason }),
-  stream: (s, m) => Object.assign(s.live, { state: m.state, state_detail: m.detail }),
-};
-for (const [type, apply] of Object.entries(liveFields)) {
-  on(type, (msg) => {
-    apply(ensureStream(msg.stream), msg);
-    changed();
-  });
-}
-
-on("handover", (msg) => {
-  state.drivingStream = msg.to_stream || null;
-  changed();
-});
-
 on("command", (msg) => {
   state.commands.unshift({ ...msg, result: null });
-  if (state.commands.length > 200) state.commands.length = 200;
+  if (state.commands.length > MAX_COMMANDS) state.commands.length = MAX_COMMANDS;
   changed();
 });
 
 on("command_result", (msg) => {
   // Attach the outcome to the newest matching command of that drone, else list it.
-  const cmd = state.commands.find(
-    (c) => c.drone === msg.drone && c.command === msg.command && !c.result,
-  );
+  const cmd = state.commands.find((c) => c.drone === msg.drone && c.command === msg.command && !c.result);
   if (cmd) cmd.result = msg;
-  else state.commands.unshift({ ...msg, result: msg });
+  else state.commands.unshift({ t: msg.t, ts: msg.ts, stream: msg.stream, drone: msg.drone, command: msg.command, result: msg });
   changed();
 });
 
 on("drone_state", (msg) => {
-  const d = ensureDrone(msg.drone);
-  d.state = msg;
+  const d = state.drones.get(msg.drone);
+  if (d) d.state = msg;
+  else state.drones.set(msg.drone, { name: msg.drone, streams: [], state: msg });
   changed();
 });
 
 on("drone_alarm", (msg) => {
   state.alarms.unshift(msg);
-  if (state.alarms.length > 50) state.alarms.length = 50;
+  if (state.alarms.length > MAX_ALARMS) state.alarms.length = MAX_ALARMS;
   changed();
 });
 
+/** The stream whose recognition drives the decisions, if any. */
+export function drivingStream() {
+  for (const s of state.streams.values()) if (s.driving) return s;
+  return null;
+}
+
+/** The drone the driving stream commands, if any. */
 export function drivingDrone() {
-  const s = state.drivingStream && state.streams.get(state.drivingStream);
-  return s ? s.drone : null;
+  return drivingStream()?.drone || null;
 }

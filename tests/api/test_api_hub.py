@@ -1,12 +1,13 @@
 """The WebSocket hub over real sockets: handshake auth, events from a replayed LASER clip,
-newest-wins per key for a slow browser, and a bus that never waits on a browser."""
+a stream's state as the console's own reducer made it, newest-wins per key for a slow
+browser, and a bus that never waits on a browser."""
 
 from __future__ import annotations
 
 import json
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import pytest
@@ -15,10 +16,19 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from proxima.api import create_app
-from proxima.api.hub import coalesce_key
+from proxima.api.hub import MESSAGE_TYPES, coalesce_key
+from proxima.api.live import STATE_ONLY_TYPES, LiveState, StreamLive
 from proxima.api.server import BackgroundServer
 from proxima.drone.events import DroneStateEvent
-from proxima.events import CommandEvent, EventBus, PoseEvent
+from proxima.events import (
+    ArmingEvent,
+    CommandEvent,
+    EventBus,
+    GestureEvent,
+    HandoverEvent,
+    PoseEvent,
+    StreamEvent,
+)
 from proxima.ingest import read_landmark_csv
 
 
@@ -27,6 +37,7 @@ class Live:
     bus: EventBus
     ws_url: str
     token: str
+    state: LiveState
 
 
 @pytest.fixture
@@ -39,7 +50,8 @@ def live(tmp_path: Path) -> Iterator[Live]:
         r = httpx.post(
             f"{server.url}/api/auth/login", json={"username": ADMIN[0], "password": ADMIN[1]}
         )
-        yield Live(bus, f"ws://127.0.0.1:{server.port}/api/ws", r.json()["token"])
+        url = f"ws://127.0.0.1:{server.port}/api/ws"
+        yield Live(bus, url, r.json()["token"], app.state.console.live)
 
 
 def _poses(clip: str, stream: str) -> list[PoseEvent]:
@@ -96,6 +108,41 @@ def test_events_reach_the_browser(live: Live) -> None:
         assert first["stream"] == "front" and len(first["xyz"]) == 33
         assert first["xyz"][0] == pytest.approx(poses[0].xyz[0], abs=1e-4)
         assert time.time() - first["ts"] < 5
+
+
+def test_a_stream_state_arrives_as_the_consoles_own(live: Live) -> None:
+    pose = _poses("hover_f", "front")[0]
+    with connect(live.ws_url, subprotocols=["proxima", live.token]) as ws:
+        hello = json.loads(ws.recv(timeout=5))
+        assert hello["streams"][0]["live"] == json.loads(json.dumps(asdict(StreamLive())))
+        live.bus.publish(StreamEvent(t=0.0, stream="front", state="live"))
+        thumb = ["all_clear", "not_clear"]
+        live.bus.publish(GestureEvent(t=2.0, stream="front", gesture="all_clear",
+                                      confidence=0.9, probs=[], withheld=thumb))  # fmt: skip
+        live.bus.publish(ArmingEvent(t=2.0, stream="front", armed=True, reason="have_command"))
+        live.bus.publish(
+            HandoverEvent(t=2.0, stream="front", from_stream="", to_stream="front", reason="x")
+        )
+        got = _recv_until(
+            ws, lambda m: m["type"] == "stream_live" and m["driving"] and m["live"]["armed"]
+        )
+        state = got[-1]
+        assert state["stream"] == "front"
+        assert state["live"] == json.loads(json.dumps(asdict(live.state.streams()["front"])))
+        assert state["live"]["gesture"] == "all_clear" and state["live"]["withheld"] == thumb
+        # A first pose changes the state (the sight); a later one with the same sight only
+        # the pose time, so it sends the pose alone.
+        for t in (3.0, 3.1):
+            live.bus.publish(PoseEvent(t=t, stream="front", xyz=pose.xyz,
+                                       visibility=pose.visibility, sight="partial"))  # fmt: skip
+        posed = _recv_until(ws, lambda m: m["type"] == "pose" and m["t"] == 3.1)
+        assert [m["live"]["sight"] for m in posed if m["type"] == "stream_live"] == ["partial"]
+        live.bus.publish(
+            HandoverEvent(t=4.0, stream="", from_stream="front", to_stream="", reason="ended")
+        )
+        got += posed + _recv_until(ws, lambda m: m["type"] == "stream_live" and not m["driving"])
+    kinds = {m["type"] for m in got}
+    assert kinds <= set(MESSAGE_TYPES) and not kinds & STATE_ONLY_TYPES
 
 
 def test_slow_browser_gets_newest_per_key_and_never_stalls_the_bus(live: Live) -> None:

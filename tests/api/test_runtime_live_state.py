@@ -9,8 +9,9 @@ from pathlib import Path
 
 from api_helpers import laser_clip
 
+from proxima.api.live import StreamLive
 from proxima.api.runtime import build_runtime
-from proxima.events import EventBus
+from proxima.events import EventBus, StreamEvent
 from proxima.settings import Settings
 from proxima.types import Event
 
@@ -31,7 +32,7 @@ def test_a_stream_state_sent_before_the_app_existed_is_in_the_snapshot(
     built = threading.Event()
 
     def hold_live(event: Event) -> None:
-        if event.type == "stream" and getattr(event, "state", "") == "live":
+        if isinstance(event, StreamEvent) and event.state == "live":
             built.wait(timeout=10)
 
     bus.add_listener(hold_live)
@@ -41,10 +42,13 @@ def test_a_stream_state_sent_before_the_app_existed_is_in_the_snapshot(
         assert runtime.engine is not None, runtime.notes
         live = runtime.app.state.console.live
         end = time.monotonic() + 30
-        while "pose_t" not in live.streams().get("front", {}) and time.monotonic() < end:
+
+        def front() -> StreamLive:
+            return live.streams().get("front", StreamLive())
+
+        while front().pose_t is None and time.monotonic() < end:
             time.sleep(0.05)
-        front = live.streams()["front"]
-        assert "pose_t" in front, "no pose from the replayed stream"
-        assert front.get("state") == "live"
+        assert front().pose_t is not None, "no pose from the replayed stream"
+        assert front().state == "live"
     finally:
         runtime.close()

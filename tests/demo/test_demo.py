@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from proxima.demo.commands import DEFAULT_CONFIG
+from proxima.demo.cli import DEFAULT_CONFIG
 from proxima.demo.runner import simulated_drones
 from proxima.demo.streams import DemoStreamError, ensure_replays, replay_files
 from proxima.scenario.fleet import free_udp_port, pid_alive

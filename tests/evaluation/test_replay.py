@@ -101,10 +101,10 @@ def test_the_replay_source_gives_the_frames_the_engine_reads_back(lost_stream, t
 
 def test_the_memo_classifier_answers_as_the_classifier_and_remembers(laser_clips, shipped) -> None:
     clip = laser_clips[0]
-    xyz, vis = clip.xyz[None, :60], clip.visibility[None, :60]
+    xyz = clip.xyz[None, :60]
     memo = MemoClassifier(shipped)
-    first = memo.predict(xyz, vis, aspect=16 / 9)
-    np.testing.assert_array_equal(first, shipped.predict(xyz, vis, aspect=16 / 9))
-    assert memo.predict(xyz.copy(), vis.copy(), aspect=16 / 9) is first and len(memo) == 1
-    memo.predict(clip.xyz[None, 1:61], clip.visibility[None, 1:61], aspect=16 / 9)
+    first = memo.predict(xyz, aspect=16 / 9)
+    np.testing.assert_array_equal(first, shipped.predict(xyz, aspect=16 / 9))
+    assert memo.predict(xyz.copy(), aspect=16 / 9) is first and len(memo) == 1
+    memo.predict(clip.xyz[None, 1:61], aspect=16 / 9)
     assert len(memo) == 2

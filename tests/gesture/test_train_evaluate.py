@@ -24,7 +24,7 @@ def test_checkpoint_is_one_self_contained_small_file(small_checkpoint, laser_cli
     assert clf.metadata["split"] == "temporal" and len(clf.metadata["data_sha256"]) == 64
     assert clf.metadata["refit_epochs"] == 0  # the refit is off by default
     w = make_windows([laser_clips[0]], stride=100)
-    probs = clf.predict(w.xyz, w.vis)
+    probs = clf.predict(w.xyz)
     assert probs.shape == (len(w), 13)
     np.testing.assert_allclose(probs.sum(axis=1), 1, atol=1e-5)
 

@@ -1,6 +1,7 @@
 """Browser tests of the console: a real server on 127.0.0.1 (uvicorn on a thread, so the
 test can drive its event bus), Debian's Chromium driven by Playwright, streams replayed
-from the LASER dataset. Screenshots go to docs/screenshots/."""
+from the LASER dataset. Screenshots go to runs/screenshots/ (`make screenshots` refreshes
+the docs' copies)."""
 
 from __future__ import annotations
 

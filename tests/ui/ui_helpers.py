@@ -1,5 +1,6 @@
 """Helpers for the browser tests: Chromium flags, users, a console server on a thread
-(so a test can drive its bus), logging in, screenshots for docs/screenshots/."""
+(so a test can drive its bus), logging in, screenshots (into runs/screenshots/, which git
+ignores; `make screenshots` copies them over docs/screenshots/)."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from proxima.settings import Settings
 from proxima.store.users import Role, create_user
 
 REPO = Path(__file__).resolve().parents[2]
-SCREENSHOTS = REPO / "docs" / "screenshots"
+SCREENSHOTS = REPO / "runs" / "screenshots"
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
     "--no-sandbox",

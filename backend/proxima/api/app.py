@@ -113,13 +113,14 @@ def create_app(
     db_engine = open_database(settings, db_engine, announce)
     sessions = make_sessionmaker(db_engine)
 
+    live = live or LiveState(bus)
     console = Console(
         settings=settings,
         bus=bus,
         db_engine=db_engine,
         sessions=sessions,
-        hub=WebSocketHub(bus),
-        live=live or LiveState(bus),
+        hub=WebSocketHub(bus, live),
+        live=live,
         recorder=SampleRecorder(bus, sessions),
         training=training,
         estop=estop,

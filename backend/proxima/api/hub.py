@@ -1,13 +1,20 @@
-"""The WebSocket hub: bus events to browsers, newest-wins per key.
+"""The WebSocket hub: bus events and the console's live state to browsers, newest-wins
+per key.
 
 The bus publishes on engine threads; the hub lives in the server's asyncio loop. The
 bus listener only stores the event in a dict under a lock and, if no hand-over is
 pending, schedules one with `call_soon_threadsafe`; recognition never waits on a
-browser. In the loop each event is encoded once and offered to every client. A client
-holds one pending message per key (a stream's pose, a drone's state, ...), so a slow
-browser gets the newest value of each key instead of a growing backlog; events without
-a key (commands, handovers, training rounds) queue in order, bounded, oldest dropped
-and counted.
+browser. The events a stream's state is reduced from (`live.STATE_ONLY_TYPES`) are not
+forwarded: when `LiveState` reports a stream changed, the hub sends that stream's
+`stream_live` message instead, read from `LiveState` when it is encoded, so it is always
+the newest. In the loop each message is encoded once and offered to every client. A
+client holds one pending message per key (a stream's pose or state, a drone's
+telemetry, ...), so a slow browser gets the newest value of each key instead of a
+growing backlog; messages without a key (commands, command results, alarms, training
+rounds) queue in order, bounded, oldest dropped and counted.
+
+Every message type is in `MESSAGE_TYPES`; the browser's types are generated from them
+(`proxima.api.typegen`).
 """
 
 from __future__ import annotations
@@ -20,7 +27,8 @@ import json
 import threading
 import time
 from collections import OrderedDict
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
 from enum import Enum
 from pathlib import Path
 from typing import Any
@@ -28,27 +36,31 @@ from typing import Any
 import numpy as np
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from proxima.api.live import DRONE_TYPES, event_drone
-from proxima.events import EventBus
+from proxima.api.events import RecordingEvent, ThumbnailEvent
+from proxima.api.live import STATE_ONLY_TYPES, LiveState, StreamLiveMessage
+from proxima.drone.events import DroneStateEvent
+from proxima.events import EVENT_TYPES, EventBus, PoseEvent
 from proxima.types import Event
 
-# Types where only the newest value per stream matters.
-STREAM_KEYED = frozenset({"pose", "gesture", "action", "stream", "thumbnail", "arming"})
-# Types keyed by an id field of their own.
-ID_KEYED = {"recording": "recording"}
+# Every `type` a browser can receive: the hub's own messages and the forwarded events.
+MESSAGE_TYPES: tuple[str, ...] = (
+    "hello",
+    StreamLiveMessage.type,
+    *(name for name in EVENT_TYPES if name not in STATE_ONLY_TYPES),
+)
 
 Key = tuple[Any, ...]
 
 
 def coalesce_key(event: Event) -> Key | None:
     """The key under which newer events replace older ones, or None to keep them all."""
-    kind = event.type
-    if kind in STREAM_KEYED:
-        return (kind, event.stream)
-    if kind in DRONE_TYPES:
-        return (kind, event_drone(event))
-    if kind in ID_KEYED:
-        return (kind, getattr(event, ID_KEYED[kind], ""))
+    match event:
+        case PoseEvent() | ThumbnailEvent():
+            return (event.type, event.stream)
+        case DroneStateEvent():
+            return (event.type, event.drone or event.stream)
+        case RecordingEvent():
+            return (event.type, event.recording)
     return None
 
 
@@ -71,21 +83,17 @@ def _json_default(value: Any) -> Any:
 def encode_event(event: Event, published: float) -> str:
     """One event as the JSON text a browser gets; `ts` is the wall time it was published
     (for latency), pose coordinates are rounded to 4 decimals to keep frames small."""
-    if event.type == "pose":
-        xyz = np.asarray(getattr(event, "xyz", ()), dtype=np.float64)
-        vis = np.asarray(getattr(event, "visibility", ()), dtype=np.float64)
-        msg: dict[str, Any] = {
-            "type": "pose",
-            "t": event.t,
-            "stream": event.stream,
-            "xyz": np.round(xyz, 4).tolist(),
-            "visibility": np.round(vis, 3).tolist(),
-            "sight": str(getattr(event, "sight", "none")),
-        }
-    else:
-        msg = event.to_dict()
+    msg = event.to_dict()
+    if isinstance(event, PoseEvent):
+        msg["xyz"] = np.round(np.asarray(event.xyz, dtype=np.float64), 4).tolist()
+        msg["visibility"] = np.round(np.asarray(event.visibility, dtype=np.float64), 3).tolist()
     msg["ts"] = published
     return json.dumps(msg, default=_json_default, separators=(",", ":"))
+
+
+def encode_state(message: StreamLiveMessage, published: float) -> str:
+    """A stream's `stream_live` message as JSON text, `ts` as for events."""
+    return json.dumps({**asdict(message), "ts": published}, separators=(",", ":"))
 
 
 @dataclass(eq=False)
@@ -126,13 +134,16 @@ class _Client:
 
 
 class WebSocketHub:
-    """Fans bus events out to connected browsers; start it inside the server's loop."""
+    """Fans bus events and `live`'s stream states out to connected browsers; start it
+    inside the server's loop."""
 
-    def __init__(self, bus: EventBus, max_unkeyed: int = 500) -> None:
+    def __init__(self, bus: EventBus, live: LiveState, max_unkeyed: int = 500) -> None:
         self.bus = bus
+        self.live = live
         self.max_unkeyed = max_unkeyed
         self._lock = threading.Lock()
-        self._incoming: OrderedDict[Key, tuple[Event, float]] = OrderedDict()
+        # A key's newest event, or the name of a stream whose state changed.
+        self._incoming: OrderedDict[Key, tuple[Event | str, float]] = OrderedDict()
         self._seq = itertools.count()
         self._scheduled = False
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -143,19 +154,25 @@ class WebSocketHub:
 
     # -- bus side (any thread) -------------------------------------------------
     def _on_event(self, event: Event) -> None:
+        if event.type in STATE_ONLY_TYPES:
+            return
+        key = coalesce_key(event)
+        self._enqueue(("#", next(self._seq)) if key is None else key, event)
+
+    def _on_stream_change(self, stream: str) -> None:
+        self._enqueue((StreamLiveMessage.type, stream), stream)
+
+    def _enqueue(self, key: Key, item: Event | str) -> None:
         loop = self._loop
         if loop is None or not self._clients:
             return
-        key = coalesce_key(event)
-        if key is None:
-            key = ("#", next(self._seq))
         now = time.time()
         with self._lock:
             self.events_in += 1
             if key in self._incoming:
                 del self._incoming[key]
                 self.events_coalesced += 1
-            self._incoming[key] = (event, now)
+            self._incoming[key] = (item, now)
             if self._scheduled:
                 return
             self._scheduled = True
@@ -168,6 +185,7 @@ class WebSocketHub:
         self._loop = asyncio.get_running_loop()
         if not self._listening:
             self.bus.add_listener(self._on_event)
+            self.live.watch(self._on_stream_change)
             self._listening = True
 
     def stop(self) -> None:
@@ -180,19 +198,14 @@ class WebSocketHub:
             batch = self._incoming
             self._incoming = OrderedDict()
             self._scheduled = False
-        for key, (event, published) in batch.items():
-            text = encode_event(event, published)
+        for key, (item, published) in batch.items():
+            if isinstance(item, str):
+                text = encode_state(self.live.stream_message(item), published)
+            else:
+                text = encode_event(item, published)
             keyed = key[0] != "#"
             for client in self._clients:
                 client.offer(key, keyed, text)
-
-    def send_to_all(self, event: Event) -> None:
-        """Publish-equivalent for events made in the loop itself (no bus round trip)."""
-        self._on_event(event)
-
-    @property
-    def client_count(self) -> int:
-        return len(self._clients)
 
     def stats(self) -> dict[str, Any]:
         return {
@@ -210,13 +223,17 @@ class WebSocketHub:
             "events_coalesced_before_loop": self.events_coalesced,
         }
 
-    async def serve(self, websocket: WebSocket, user: str, hello: dict[str, Any]) -> None:
-        """Run one accepted browser connection until it closes."""
+    async def serve(
+        self, websocket: WebSocket, user: str, hello: Callable[[], dict[str, Any]]
+    ) -> None:
+        """Run one accepted browser connection until it closes. `hello()` makes the first
+        message; it is called once the client is registered, so no change after it is
+        missed (one just before it may come again after it: newest wins)."""
         client = _Client(websocket=websocket, user=user, max_unkeyed=self.max_unkeyed)
         self._clients.add(client)
         receiver = asyncio.create_task(self._receive(client))
         try:
-            await websocket.send_text(json.dumps(hello, default=_json_default))
+            await websocket.send_text(json.dumps(hello(), default=_json_default))
             while not receiver.done() and self._loop is not None:
                 item = client.take()
                 if item is None:
@@ -236,10 +253,8 @@ class WebSocketHub:
                 await websocket.close()
 
     async def _receive(self, client: _Client) -> None:
-        """Read what the browser sends (only pings are answered); ends on close."""
+        """Read until the browser closes (it sends nothing the hub answers)."""
         while True:
             msg = await client.websocket.receive()
             if msg["type"] == "websocket.disconnect":
                 return
-            if msg.get("text") == "ping":
-                client.offer(("pong",), True, json.dumps({"type": "pong", "ts": time.time()}))

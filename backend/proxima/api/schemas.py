@@ -1,12 +1,17 @@
-"""Request and response bodies of the console API."""
+"""Request and response bodies of the console API, and the WebSocket's `hello`.
+
+The browser's types are generated from these (FastAPI's OpenAPI) and from the event
+registry: `python -m proxima.api.typegen` writes `frontend/src/types.gen.js`."""
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from proxima.api.live import LiveCommand, StreamLive
 from proxima.api.recorder import MAX_COUNTDOWN_S, MAX_FRAMES
+from proxima.drone.events import DroneStateEvent
 from proxima.federated.config import (
     BatchSize,
     FractionFit,
@@ -53,6 +58,9 @@ class UserCreate(_In):
 
 
 class StreamOut(BaseModel):
+    """A camera stream: its configuration (`configured` False for one only seen on the
+    bus) and its newest state."""
+
     name: str
     uri: str
     kind: str
@@ -60,10 +68,12 @@ class StreamOut(BaseModel):
     priority: int
     configured: bool
     driving: bool
-    live: dict[str, Any]
+    live: StreamLive
 
 
 class DroneOut(BaseModel):
+    """A drone: its configuration and its newest telemetry (None before the first)."""
+
     name: str
     connection: str
     sysid: int
@@ -71,7 +81,19 @@ class DroneOut(BaseModel):
     configured: bool
     streams: list[str]
     driving: bool
-    state: dict[str, Any]
+    state: DroneStateEvent | None
+
+
+class Hello(BaseModel):
+    """The WebSocket's first message: who is connected and the console's live picture
+    (what `GET /streams`, `/drones` and `/commands/live` return), before any event."""
+
+    type: Literal["hello"] = "hello"
+    ts: float
+    user: UserOut
+    streams: list[StreamOut]
+    drones: list[DroneOut]
+    commands: list[LiveCommand]  # newest first
 
 
 class RecordingRequest(_In):

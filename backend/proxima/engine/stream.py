@@ -56,9 +56,7 @@ class Classifier(Protocol):
     window: int
     labels: tuple[str, ...]
 
-    def predict(
-        self, xyz: np.ndarray, visibility: np.ndarray | None = None, aspect: float = ...
-    ) -> np.ndarray: ...
+    def predict(self, xyz: np.ndarray, aspect: float = ...) -> np.ndarray: ...
 
 
 @dataclass(eq=False)
@@ -232,7 +230,7 @@ class StreamPipeline:
         size = pose.image_size
         aspect = size[0] / size[1] if size else DATASET_ASPECT
         classifier = self._classifier
-        probs = np.asarray(classifier.predict(xyz, vis, aspect=aspect))[0]
+        probs = np.asarray(classifier.predict(xyz, aspect=aspect))[0]
         self.classifications += 1
         best = int(np.argmax(probs))
         withheld = self.evidence.withheld(vis[0])

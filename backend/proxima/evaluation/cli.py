@@ -10,7 +10,7 @@ from typing import Annotated, NoReturn
 
 import typer
 
-from proxima.gesture.commands import DataOpt, SplitOpt
+from proxima.gesture.cli import DataOpt, SplitOpt
 
 
 def register(app: typer.Typer) -> None:

@@ -111,8 +111,8 @@ class MemoClassifier:
 
     Replaying one stream again (another stride, the offline replay after the engine run)
     asks for many of the same windows, and a window's probabilities depend on its content
-    alone, so each is computed once. The key is a digest of the window's landmarks,
-    visibility and aspect ratio.
+    alone, so each is computed once. The key is a digest of the window's landmarks and
+    the aspect ratio (the classifier does not read visibility).
     """
 
     def __init__(self, classifier: Classifier) -> None:
@@ -124,23 +124,16 @@ class MemoClassifier:
     def __len__(self) -> int:
         return len(self._memo)
 
-    def predict(
-        self,
-        xyz: np.ndarray,
-        visibility: np.ndarray | None = None,
-        aspect: float = DATASET_ASPECT,
-    ) -> np.ndarray:
+    def predict(self, xyz: np.ndarray, aspect: float = DATASET_ASPECT) -> np.ndarray:
         """The classifier's probabilities for windows `xyz`, from memory if seen."""
         digest = hashlib.blake2b(digest_size=16)
         digest.update(repr(np.shape(xyz)).encode())
         digest.update(np.ascontiguousarray(xyz).tobytes())
-        if visibility is not None:
-            digest.update(np.ascontiguousarray(visibility).tobytes())
         digest.update(np.asarray(aspect, dtype=np.float64).tobytes())
         key = digest.digest()
         probs = self._memo.get(key)
         if probs is None:
-            probs = np.asarray(self.classifier.predict(xyz, visibility, aspect=aspect))
+            probs = np.asarray(self.classifier.predict(xyz, aspect=aspect))
             self._memo[key] = probs
         return probs
 
@@ -154,13 +147,8 @@ class _Recorder:
         self.labels = classifier.labels
         self.outputs: list[np.ndarray] = []
 
-    def predict(
-        self,
-        xyz: np.ndarray,
-        visibility: np.ndarray | None = None,
-        aspect: float = DATASET_ASPECT,
-    ) -> np.ndarray:
-        probs = np.asarray(self.classifier.predict(xyz, visibility, aspect=aspect))
+    def predict(self, xyz: np.ndarray, aspect: float = DATASET_ASPECT) -> np.ndarray:
+        probs = np.asarray(self.classifier.predict(xyz, aspect=aspect))
         self.outputs.append(probs[0])
         return probs
 

@@ -125,10 +125,6 @@ class FederatedRunner:
         self._publish_run(cfg.run_id)
         return cfg.run_id
 
-    def start(self, params: dict[str, Any] | None = None) -> str:
-        """`start_run` by its short name (the CLI and scripts use this)."""
-        return self.start_run(params or {})
-
     def list_runs(self) -> list[dict[str, Any]]:
         return self.store.list_runs()
 

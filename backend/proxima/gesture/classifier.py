@@ -108,8 +108,7 @@ class GestureClassifier:
         hz = np.full(len(xyz), has_z)
         return self.pipeline.transform(to_metric(xyz, np.broadcast_to(aspect, (len(xyz),))), hz)
 
-    def predict(self, xyz: np.ndarray, visibility: np.ndarray | None = None,
-                aspect: float | np.ndarray = 16 / 9) -> np.ndarray:  # fmt: skip
+    def predict(self, xyz: np.ndarray, aspect: float | np.ndarray = 16 / 9) -> np.ndarray:
         """Softmax probabilities (N, 13) for windows xyz (N, W, 33, 3) (normalised image
         coordinates, as MediaPipe gives them; `aspect` = image width / height)."""
         xyz = np.asarray(xyz, np.float32)

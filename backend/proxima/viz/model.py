@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from proxima.drone.events import DroneStateEvent
+from proxima.events import HandoverEvent, PoseEvent
 from proxima.settings import Settings
 from proxima.types import Event
 
@@ -121,36 +123,36 @@ class SceneModel:
         return None
 
     def apply(self, event: Event) -> None:
-        kind = event.type
         with self._lock:
-            if kind == "drone_state":
-                name = str(getattr(event, "drone", "") or event.stream)
-                track = self.drones.get(name) or self._add_drone(name, (0.0, 0.0, 0.0))
-                track.link = str(getattr(event, "link", ""))
-                track.armed = bool(getattr(event, "armed", False))
-                track.mode = str(getattr(event, "mode", ""))
-                ned = getattr(event, "position", None)
-                if ned is not None:
-                    pos = ned_to_world(track.home, ned)
-                    if track.position is None or np.linalg.norm(pos - track.position) > 0.01:
-                        track.trail.append(pos)
-                    track.position = pos
-            elif kind == "handover":
-                self.driving_stream = getattr(event, "to_stream", None) or None
-            elif kind == "pose":
-                if event.stream != self._operator_stream():
+            match event:
+                case DroneStateEvent():
+                    name = event.drone or event.stream
+                    track = self.drones.get(name) or self._add_drone(name, (0.0, 0.0, 0.0))
+                    track.link = event.link
+                    track.armed = event.armed
+                    track.mode = event.mode
+                    if event.position is not None:
+                        pos = ned_to_world(track.home, event.position)
+                        if track.position is None or np.linalg.norm(pos - track.position) > 0.01:
+                            track.trail.append(pos)
+                        track.position = pos
+                case HandoverEvent():
+                    self.driving_stream = event.to_stream or None
+                case PoseEvent():
+                    if event.stream != self._operator_stream():
+                        return
+                    # Seen well enough to read gestures (the watchdog's rule, types.Sight).
+                    self.operator_visible = event.sight != "none"
+                    segs = operator_segments(
+                        np.asarray(event.xyz),
+                        np.asarray(event.visibility),
+                        self.operator_base,
+                        self.settings.view.operator_height_m,
+                    )
+                    if segs is not None:
+                        self.operator = segs
+                case _:
                     return
-                self.operator_visible = bool(getattr(event, "visible", False))
-                segs = operator_segments(
-                    np.asarray(getattr(event, "xyz", ())),
-                    np.asarray(getattr(event, "visibility", ())),
-                    self.operator_base,
-                    self.settings.view.operator_height_m,
-                )
-                if segs is not None:
-                    self.operator = segs
-            else:
-                return
             self.version += 1
 
     def snapshot(self) -> dict:

@@ -12,7 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from proxima.events import EventBus
+from proxima.drone.events import DroneStateEvent
+from proxima.events import EventBus, HandoverEvent, PoseEvent
 from proxima.settings import Settings
 from proxima.viz.model import SceneModel
 
@@ -25,7 +26,7 @@ COLORS = {
     "operator_lost": (170, 170, 170),
     "fence": (248, 81, 73),
 }
-VIZ_TYPES = ("drone_state", "handover", "pose")
+VIZ_TYPES = tuple(cls.type for cls in (DroneStateEvent, HandoverEvent, PoseEvent))
 
 
 def geofence_segments(

@@ -1,3 +1,4 @@
+// @ts-check
 // Live page: one tile per stream (frame + skeleton, raw gesture, filtered action, armed,
 // stream and link state), the driving stream highlighted, drones and the command log
 // beside.
@@ -5,24 +6,45 @@ import { isSupervisor } from "../api.js";
 import { openEstop } from "../estop.js";
 import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
-import { drivingDrone, state, subscribe } from "../store.js";
+import { drivingDrone, state } from "../store.js";
+
+/** @typedef {import("../store.js").StreamRecord} StreamRecord */
+/**
+ * @typedef {object} Tile
+ * @property {HTMLElement} el
+ * @property {HTMLCanvasElement} canvas
+ * @property {CanvasRenderingContext2D} ctx
+ * @property {Record<string, HTMLElement>} f the tile's text fields by name
+ */
 
 const W = 384;
 const H = 216;
+/** @type {HTMLElement | null} */
 let root = null;
 let raf = 0;
-let unsub = null;
 let seenVersion = -1;
-const tiles = new Map(); // stream -> {el, canvas, ctx, fields}
+/** @type {Map<string, Tile>} */
+const tiles = new Map();
 
-const pct = (x) => (typeof x === "number" ? `${Math.round(x * 100)}%` : "");
+/** @param {number} x */
+const pct = (x) => `${Math.round(x * 100)}%`;
 // What the operator field says for a pose event's `sight` (see proxima.types.Sight).
+/** @type {Record<string, string>} */
 const SIGHT_TEXT = { full: "in view", partial: "feet out of view", none: "lost" };
-const fmtTime = (wall) => (wall ? new Date(wall * 1000).toLocaleTimeString() : "");
 
+/** @param {HTMLElement} container @param {string} selector */
+function find(container, selector) {
+  const found = container.querySelector(selector);
+  if (!(found instanceof HTMLElement)) throw new Error(`no ${selector} on the Live page`);
+  return found;
+}
+
+/** @param {StreamRecord} s @returns {Tile} */
 function makeTile(s) {
   const canvas = el("canvas", { width: W, height: H, class: "frame" });
+  /** @type {Record<string, HTMLElement>} */
   const f = {};
+  /** @param {string} name @param {string} label */
   const field = (name, label) => {
     f[name] = el("span", { class: `value ${name}` });
     return el("div", { class: `field f-${name}` }, el("span", { class: "label", text: label }), f[name]);
@@ -46,12 +68,14 @@ function makeTile(s) {
     ),
   );
   const ctx = canvas.getContext("2d");
+  if (!ctx) throw new Error("no 2D canvas in this browser");
   clear(ctx, W, H);
   return { el: tile, canvas, ctx, f };
 }
 
+/** @param {StreamRecord} s @param {Tile} t */
 function renderTileText(s, t) {
-  const driving = state.drivingStream === s.name;
+  const driving = s.driving;
   t.el.classList.toggle("driving", driving);
   const drone = state.drones.get(s.drone);
   const link = drone?.state?.link || "";
@@ -61,10 +85,10 @@ function renderTileText(s, t) {
     el("span", { class: "badge", text: s.kind }),
     ...(driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
   );
-  const lv = s.live;
+  const lv = s.live; // the server's StreamLive (api/live.py)
   // all_clear / not_clear differ only in the thumb: the engine does not let them become
   // the action while the camera does not see the operator's hand (control/evidence.py).
-  const held = Boolean(lv.gesture) && (lv.withheld || []).includes(lv.gesture);
+  const held = Boolean(lv.gesture) && lv.withheld.includes(lv.gesture);
   t.f.gesture.textContent = lv.gesture
     ? `${lv.gesture} ${pct(lv.gesture_confidence)}${held ? " · hand not seen: withheld" : ""}`
     : "—";
@@ -76,9 +100,10 @@ function renderTileText(s, t) {
   t.f.state.className = `value state s-${lv.state || "none"}`;
   t.f.link.textContent = link || "—";
   t.f.link.className = `value link l-${link || "none"}`;
-  t.f.sight.textContent = SIGHT_TEXT[lv.sight] || "—";
+  t.f.sight.textContent = (lv.sight && SIGHT_TEXT[lv.sight]) || "—";
 }
 
+/** @param {StreamRecord} s @param {Tile} t */
 function drawTile(s, t) {
   const ctx = t.ctx;
   if (s.thumb) ctx.drawImage(s.thumb, 0, 0, W, H);
@@ -88,18 +113,19 @@ function drawTile(s, t) {
   t.canvas.dataset.poseT = s.pose ? String(s.pose.t) : "";
 }
 
-function renderSide() {
-  const drones = root.querySelector(".drones");
+/** @param {HTMLElement} root */
+function renderSide(root) {
+  const drones = find(root, ".drones");
   const driving = drivingDrone();
   drones.replaceChildren(
     ...[...state.drones.values()].map((d) => {
-      const st = d.state || {};
-      const pos = st.position ? st.position.map((v) => v.toFixed(1)).join(", ") : "—";
+      const st = d.state;
+      const pos = st?.position ? st.position.map((v) => v.toFixed(1)).join(", ") : "—";
       const card = el(
         "div",
         { class: `drone ${d.name === driving ? "driving" : ""}`, "data-drone": d.name },
         el("b", { text: d.name }),
-        el("span", { class: `badge l-${st.link || "none"}`, text: st.link || "no telemetry" }),
+        el("span", { class: `badge l-${st?.link || "none"}`, text: st?.link || "no telemetry" }),
         ...(d.name === driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
       );
       if (isSupervisor()) {
@@ -107,10 +133,10 @@ function renderSide() {
         b.addEventListener("click", () => openEstop(d.name));
         card.append(b);
       }
-      const battery = st.battery_pct != null ? `${Math.round(st.battery_pct)}%` : "—";
+      const battery = st?.battery_pct != null ? `${Math.round(st.battery_pct)}%` : "—";
       card.append(
         el("div", {
-          text: st.link
+          text: st?.link
             ? [st.mode, st.armed ? "motors armed" : "motors disarmed", st.landed].filter(Boolean).join(" · ")
             : "no telemetry yet",
         }),
@@ -119,12 +145,12 @@ function renderSide() {
       return card;
     }),
   );
-  const log = root.querySelector(".command-log tbody");
+  const log = find(root, ".command-log tbody");
   log.replaceChildren(
     ...state.commands.slice(0, 60).map((c) => {
       const r = c.result;
       const outcome = r ? [r.status, r.ack, r.outcome].filter(Boolean).join(" · ") : "decided";
-      const when = typeof c.ts === "number" ? new Date(c.ts * 1000).toLocaleTimeString() : "";
+      const when = new Date(c.ts * 1000).toLocaleTimeString();
       return el(
         "tr",
         { class: r ? `st-${r.status}` : "" },
@@ -136,7 +162,7 @@ function renderSide() {
       );
     }),
   );
-  const alarms = root.querySelector(".alarms");
+  const alarms = find(root, ".alarms");
   alarms.replaceChildren(
     ...state.alarms
       .filter((a) => a.active)
@@ -145,8 +171,9 @@ function renderSide() {
   );
 }
 
-function syncTiles() {
-  const grid = root.querySelector(".tiles");
+/** @param {HTMLElement} root */
+function syncTiles(root) {
+  const grid = find(root, ".tiles");
   const streams = [...state.streams.values()].sort((a, b) => a.priority - b.priority);
   for (const s of streams) {
     if (!tiles.has(s.name)) {
@@ -163,9 +190,12 @@ function frame() {
   if (!root) return;
   if (seenVersion !== state.version) {
     seenVersion = state.version;
-    syncTiles();
-    for (const s of state.streams.values()) renderTileText(s, tiles.get(s.name));
-    renderSide();
+    syncTiles(root);
+    for (const s of state.streams.values()) {
+      const t = tiles.get(s.name);
+      if (t) renderTileText(s, t);
+    }
+    renderSide(root);
   }
   for (const s of state.streams.values()) {
     const t = tiles.get(s.name);
@@ -176,12 +206,12 @@ function frame() {
     if (s.dirty) {
       s.dirty = false;
       drawTile(s, t);
-      t.f.sight.textContent = SIGHT_TEXT[s.live.sight] || "—";
     }
   }
   raf = requestAnimationFrame(frame);
 }
 
+/** @param {HTMLElement} container */
 export function mount(container) {
   root = container;
   root.append(
@@ -204,13 +234,11 @@ export function mount(container) {
   tiles.clear();
   seenVersion = -1;
   for (const s of state.streams.values()) s.dirty = true;
-  unsub = subscribe(() => {});
   raf = requestAnimationFrame(frame);
 }
 
 export function unmount() {
   cancelAnimationFrame(raf);
-  if (unsub) unsub();
   root = null;
   tiles.clear();
 }

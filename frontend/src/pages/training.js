@@ -15,10 +15,6 @@ import { on } from "../ws.js";
 
 Chart.register(LineController, LineElement, PointElement, LinearScale, Legend, Tooltip);
 
-// Bus event types a federated run publishes per round / per state change.
-export const ROUND_EVENTS = ["training_round", "fl_round"];
-export const RUN_EVENTS = ["training_run", "fl_run"];
-
 const COLORS = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae"];
 let root = null;
 let charts = {};
@@ -66,15 +62,13 @@ function series(chart, name, i) {
   return ds;
 }
 
-// A round record: {round, global_accuracy, global_loss?, clients: [{drone|client, loss,
-// accuracy, ...}] or {name: {...}}}.
+// A round, from GET /training/runs/{id} or a `training_round` message: {round,
+// global_accuracy, global_loss, clients: [{drone, phase, status, loss, accuracy, ...}]}.
 function clientsOf(r) {
-  const c = r.clients || r.per_client || [];
-  const rows = Array.isArray(c) ? c : Object.entries(c).map(([drone, m]) => ({ drone, ...m }));
   // Each drone's own training result of the round (not a failed or federated-evaluation row).
-  return rows
+  return (r.clients || [])
     .filter((x) => (x.phase ?? "train") === "train" && (x.status ?? "ok") === "ok")
-    .map((x) => [x.drone || x.client || x.name, x]);
+    .map((x) => [x.drone, x]);
 }
 
 function addRound(r) {
@@ -88,7 +82,7 @@ function addRound(r) {
   put(charts.accuracy, "global", 0, r.global_accuracy);
   put(charts.loss, "global", 0, r.global_loss);
   clientsOf(r).forEach(([name, m], i) => {
-    put(charts.accuracy, name, i + 1, m.accuracy ?? m.val_accuracy);
+    put(charts.accuracy, name, i + 1, m.accuracy);
     put(charts.loss, name, i + 1, m.loss ?? m.train_loss);
   });
   for (const chart of Object.values(charts)) chart.update();
@@ -259,31 +253,23 @@ export function mount(container) {
     setStatus("No federated runner in this server: runs cannot start.", "warn");
   }
   charts = { loss: makeChart(q("canvas.loss"), "loss"), accuracy: makeChart(q("canvas.accuracy"), "accuracy", 1) };
-  for (const type of ROUND_EVENTS) {
-    offs.push(
-      on(type, (msg) => {
-        const run = msg.run_id ?? msg.run;
-        if (selected === null) {
-          selected = run;
-          resetCharts(`Run ${run}: running`);
-        }
-        if (run === selected) addRound(msg);
-      }),
-    );
-  }
-  for (const type of RUN_EVENTS) {
-    offs.push(
-      on(type, (msg) => {
-        const run = msg.run_id ?? msg.run;
-        if (run === selected) {
-          const detail = msg.detail ? ` (${msg.detail})` : "";
-          q(".run-title").textContent = `Run ${run}: ${msg.status || ""}${detail}`;
-        }
-        refreshRuns();
-        if (msg.status === "completed") refreshModels();
-      }),
-    );
-  }
+  offs.push(
+    on("training_round", (msg) => {
+      if (selected === null) {
+        selected = msg.run_id;
+        resetCharts(`Run ${msg.run_id}: running`);
+      }
+      if (msg.run_id === selected) addRound(msg);
+    }),
+    on("training_run", (msg) => {
+      if (msg.run_id === selected) {
+        const detail = msg.detail ? ` (${msg.detail})` : "";
+        q(".run-title").textContent = `Run ${msg.run_id}: ${msg.status}${detail}`;
+      }
+      refreshRuns();
+      if (msg.status === "completed") refreshModels();
+    }),
+  );
   refreshRuns().catch((err) => setStatus(err.message, "error"));
   refreshModels().catch((err) => setStatus(err.message, "error"));
 }

@@ -9,6 +9,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query
 
 from proxima.api.deps import ConsoleDep, CurrentUser
+from proxima.api.live import LiveCommand
 
 router = APIRouter(prefix="/commands", tags=["commands"])
 
@@ -29,8 +30,8 @@ def live_commands(
     console: ConsoleDep,
     drone: str | None = None,
     limit: Annotated[int, Query(ge=1, le=1000)] = 100,
-) -> list[dict[str, Any]]:
+) -> list[LiveCommand]:
     rows = console.live.commands()
     if drone is not None:
-        rows = [r for r in rows if r.get("drone") == drone]
+        rows = [r for r in rows if r.drone == drone]
     return rows[:limit]

@@ -33,7 +33,7 @@ def drone_list(console: Console) -> list[DroneOut]:
                 configured=True,
                 streams=streams_of.get(d.name, []),
                 driving=driving_drone == d.name,
-                state=live.pop(d.name, {}),
+                state=live.pop(d.name, None),
             )
         )
     for name, state in sorted(live.items()):

@@ -7,6 +7,7 @@ import re
 from fastapi import APIRouter, HTTPException, status
 
 from proxima.api.deps import ConsoleDep, CurrentUser
+from proxima.api.live import StreamLive
 from proxima.api.schemas import StreamOut
 from proxima.api.services import Console
 
@@ -34,7 +35,7 @@ def stream_list(console: Console) -> list[StreamOut]:
                 priority=s.priority,
                 configured=True,
                 driving=driving == s.name,
-                live=live.pop(s.name, {}),
+                live=live.pop(s.name, StreamLive()),
             )
         )
     for name, state in sorted(live.items()):  # streams seen on the bus only

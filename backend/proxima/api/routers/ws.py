@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import time
+from typing import Any
 
 from fastapi import APIRouter, WebSocket, status
 
 from proxima.api.auth import WS_SUBPROTOCOL, token_from
 from proxima.api.routers.drones import drone_list
 from proxima.api.routers.streams import stream_list
+from proxima.api.schemas import Hello, UserOut
 from proxima.store.users import user_for_token
 
 router = APIRouter(tags=["ws"])
@@ -28,13 +30,18 @@ async def websocket_endpoint(websocket: WebSocket) -> None:
         return
     offered = [p.strip() for p in websocket.headers.get("sec-websocket-protocol", "").split(",")]
     await websocket.accept(subprotocol=WS_SUBPROTOCOL if WS_SUBPROTOCOL in offered else None)
-    hello = {
-        "type": "hello",
-        "ts": time.time(),
-        "user": {"username": user.username, "role": user.role},
-        "streams": [s.model_dump() for s in stream_list(console)],
-        "drones": [d.model_dump() for d in drone_list(console)],
-        "commands": console.live.commands()[:50],
-    }
+    me = UserOut(
+        username=user.username, role=user.role, must_change_password=user.must_change_password
+    )
+
+    def hello() -> dict[str, Any]:
+        return Hello(
+            ts=time.time(),
+            user=me,
+            streams=stream_list(console),
+            drones=drone_list(console),
+            commands=console.live.commands()[:50],
+        ).model_dump(mode="json")
+
     console.hub.start()
     await console.hub.serve(websocket, user.username, hello)
