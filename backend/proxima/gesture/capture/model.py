@@ -402,9 +402,15 @@ class CaptureModel:
         elev = np.deg2rad(rng.uniform(*self._s("elevation_deg"), size=n))
         yaw = np.deg2rad(_signed(rng, self._s("yaw_deg"), n)) * has_z
         if np.any(elev) or np.any(yaw):
+            # MediaPipe's z leans an upright torso towards the camera (LASER front view:
+            # shoulders 0.6 torso lengths nearer than the hips): a bias, not a pose.
+            # Turn the body with that lean taken out, then put it back.
+            lean = _lean(m)[:, None, None]
+            m[..., 2] -= lean * (m[..., 1] - _hips(m)[..., 1])
             pivot = _hips(m).mean(axis=1, keepdims=True)  # (N, 1, 1, 3)
-            rot = _rx(elev) @ _ry(yaw)
+            rot = (_rx(elev) @ _ry(yaw)).astype(np.float32)
             m = (m - pivot) @ rot.transpose(0, 2, 1)[:, None] + pivot
+            m[..., 2] += lean * (m[..., 1] - _hips(m)[..., 1])
             m[..., 2] = np.where(has_z[:, None, None], m[..., 2], 0.0)
         roll = np.deg2rad(_signed(rng, self._s("roll_deg"), n))
         if np.any(roll):
@@ -523,6 +529,14 @@ def _signed(rng: np.random.Generator, span: tuple[float, float], n: int) -> np.n
 
 def _hips(m: np.ndarray) -> np.ndarray:
     return (m[..., L_HIP : L_HIP + 1, :] + m[..., R_HIP : R_HIP + 1, :]) / 2
+
+
+def _lean(m: np.ndarray) -> np.ndarray:
+    """(N,) dz/dy of the torso (shoulder midpoint minus hip midpoint), median over time:
+    how far MediaPipe's z leans the upper body towards the camera per unit of height."""
+    d = (m[..., L_SHOULDER, :] + m[..., R_SHOULDER, :] - m[..., L_HIP, :] - m[..., R_HIP, :]) / 2
+    dy = np.where(np.abs(d[..., 1]) > 1e-4, d[..., 1], -1e-4)
+    return np.median(d[..., 2] / dy, axis=1)
 
 
 def _torso(m: np.ndarray) -> np.ndarray:
