@@ -11,20 +11,24 @@ subtracted from the landmarks, so what is left is the estimator's own jitter.
 
 Person size is the person's height as a fraction of the frame height, defined through
 the torso as the estimator sees it: height = STATURE_TORSO x torso length (shoulder
-midpoint to hip midpoint, the median over the run; 2.7 from the LASER front view, see
-`stature_ratio`). The photos show the upper body only, and at the scales used MediaPipe
-reads each as a small whole person (hips inside the photo, visibility near 1, legs
-guessed at low visibility): the torso is the scale the estimator itself works at. The
-photo scales (PHOTO_SCALES) put that person at about 15-90% of the frame height; the
-height reached is measured, not assumed.
+midpoint to hip midpoint, median over the run; 2.65, from the LASER front view by
+`python -m bench.capture_constants`). The photos show the upper body only; at these
+scales MediaPipe reads each as a small whole person (hips inside the photo, visibility
+near 1, legs guessed at low visibility), so the torso is the scale the estimator itself
+works at. The photo scales (PHOTO_SCALES) put that person at about 12-90% of the frame
+height; the height reached is measured, not assumed.
 
-Reported per run (photo x size, `--frames` frames at 30 fps): per landmark and axis, the
-jitter (standard deviation about the run's mean, in normalised image units and in
-torso lengths in a metric frame where x and y share one scale), the frame-to-frame
-step RMS, the lag-1..3 autocorrelation of the jitter, the mean visibility and its
-frame-to-frame spread, before and after the tracker's One Euro filter; then pooled:
-jitter of the visible landmarks against size (with a power-law fit) and jitter
-against visibility (relative to the same run's visible landmarks).
+Two protocols per photo: `fresh`, a new stream per scale (the estimator must find the
+person, as when a drone first sees its operator), and `tracked`, one stream through
+all the scales from the largest down (the person walks away while tracked).
+
+Reported per run (`--frames` frames at 30 fps, the first WARMUP left out): per landmark
+and axis, the jitter (standard deviation about the run's mean, in normalised image
+units and in torso lengths in a metric frame where x and y share one scale), the
+frame-to-frame step RMS, the lag-1..3 autocorrelation, the mean visibility and its
+frame-to-frame step, before and after the tracker's One Euro filter; then pooled: the
+visible landmarks' jitter against size and every landmark's against visibility, with
+fits, which `proxima.gesture.capture` uses.
 
     python -m bench.pose_jitter [--frames 150] [--noise 4]
 
@@ -49,13 +53,13 @@ from typing import Any
 import cv2
 import numpy as np
 
+from proxima.gesture.capture.measured import STATURE_TORSO
 from proxima.gesture.geometry import Z_SCALE
 
 RESULTS = Path(__file__).resolve().parent / "results"
 WIDTH, HEIGHT = 1280, 720
 ASPECT = WIDTH / HEIGHT
 FPS = 30.0
-STATURE_TORSO = 2.7  # person height / torso length; see stature_ratio()
 # Photo scales: the person from about 15% to 90% of the frame height as the estimator
 # sees it. Grace Hopper's photo above 0.7 makes MediaPipe place the hips far below the
 # photo (visibility near 0), so its torso, hence its size, means nothing there.
@@ -84,28 +88,6 @@ def load_photo(name: str) -> np.ndarray:
 
         return np.ascontiguousarray(astronaut()[:, :, ::-1])
     raise ValueError(f"unknown photo {name!r}")
-
-
-def stature_ratio(laser_dir: str | None) -> dict[str, float]:
-    """Person height in torso lengths on the LASER front-view clips: heel-to-nose span
-    over the torso length (metric frame, median over frames), and that span divided by
-    0.91 (the nose sits at about 91% of stature; the head top is above it)."""
-    from proxima.gesture.data_source import resolve_dataset
-    from proxima.gesture.geometry import to_metric
-    from proxima.gesture.laser import load_laser_dir
-
-    ratios = []
-    for c in load_laser_dir(resolve_dataset(laser_dir)):
-        if c.view != "f":
-            continue
-        m = to_metric(c.xyz, c.aspect)
-        torso = np.linalg.norm(
-            ((m[:, 11] + m[:, 12]) / 2 - (m[:, 23] + m[:, 24]) / 2)[:, :2], axis=-1
-        )
-        span = m[:, [29, 30], 1].mean(axis=1) - m[:, 0, 1]
-        ratios.append(float(np.median(span / torso)))
-    span = float(np.median(ratios))
-    return {"heel_to_nose_torso": round(span, 3), "stature_torso": round(span / 0.91, 3)}
 
 
 def compose(photo: np.ndarray, scale: float) -> np.ndarray:
@@ -341,6 +323,31 @@ def size_law(h: np.ndarray, s: np.ndarray) -> dict[str, Any]:
     }
 
 
+def visibility_law(ok: list[dict[str, Any]], kind: str) -> dict[str, Any]:
+    """Fit factor = 1 + k * (1 - visibility) ** q to every landmark's jitter over its
+    run's visible median (least squares on log factor)."""
+    from scipy.optimize import curve_fit
+
+    ratio = np.concatenate(
+        [np.asarray(r[kind]["std_torso_xy"]) / r[f"{kind}_visible"]["std_torso_xy"] for r in ok]
+    )
+    vis = np.concatenate([np.asarray(r["mean_visibility"]) for r in ok])
+
+    def model(v: np.ndarray, k: float, q: float) -> np.ndarray:
+        return np.log(1 + k * (1 - v) ** q)
+
+    (k, q), _ = curve_fit(model, vis, np.log(ratio), p0=[10.0, 1.0],
+                          bounds=([0, 0.05], [1000, 10]))  # fmt: skip
+    resid = model(vis, k, q) - np.log(ratio)
+    return {
+        "form": "jitter factor = 1 + k * (1 - visibility) ** q",
+        "k": float(k),
+        "q": float(q),
+        "rms_log_residual": float(np.sqrt(np.mean(resid**2))),
+        "at": {f"{v}": float(np.exp(model(np.array(v), k, q))) for v in (0.2, 0.5, 0.8, 0.9)},
+    }
+
+
 def by_visibility(ok: list[dict[str, Any]], kind: str) -> list[dict[str, Any]]:
     """Each landmark's jitter over its run's visible median, and its visibility's
     frame-to-frame step, binned by the landmark's mean visibility."""
@@ -375,6 +382,7 @@ def pooled(runs: list[dict[str, Any]]) -> dict[str, Any]:
         s = np.array([r[f"{kind}_visible"]["std_torso_xy"] for r in ok])
         out[f"{kind}_size_law"] = size_law(h, s)
         out[f"{kind}_visibility_factor"] = by_visibility(ok, kind)
+        out[f"{kind}_visibility_law"] = visibility_law(ok, kind)
     for photo in sorted({r["photo"] for r in ok}):
         mine = [r for r in ok if r["photo"] == photo]
         out[photo] = {
@@ -397,6 +405,10 @@ def pooled(runs: list[dict[str, Any]]) -> dict[str, Any]:
     )
     kept = [r["filtered_visible"]["std_torso_xy"] / r["raw_visible"]["std_torso_xy"] for r in ok]
     out["filter_ratio_visible_median"] = float(np.median(kept))
+    # What MediaPipe reports for body parts absent from the image but inside the frame:
+    # the photos show no legs (knees, ankles, heels, feet).
+    legs = np.concatenate([np.asarray(r["mean_visibility"])[25:33] for r in ok])
+    out["absent_legs_visibility_p25_p50_p75"] = np.percentile(legs, [25, 50, 75]).tolist()
     return out
 
 
@@ -458,7 +470,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--photos", default="grace_hopper,astronaut")
     ap.add_argument("--num-poses", type=int, default=2, help="as the live engine (2)")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--data", default=None, help="LASER folder (for the stature ratio)")
     ap.add_argument("--out", type=Path, default=RESULTS / "pose_jitter.json")
     args = ap.parse_args(argv)
     if args.frames < WARMUP + 20:
@@ -482,7 +493,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "num_poses": args.num_poses,
         "warmup_frames": WARMUP,
         "visible_threshold": VISIBLE,
-        "stature": {"used": STATURE_TORSO, **stature_ratio(args.data)},
+        "stature_torso": STATURE_TORSO,
         "one_euro": {"min_cutoff": 1.0, "beta": 30.0, "d_cutoff": 1.0},
         "runs": runs,
     }
@@ -495,6 +506,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p = result["pooled"]
     law = p["raw_size_law"]
     print(f"size law (raw): {law['a']:.4f} + {law['b']:.4f} * (0.6/h)^{law['p']:.2f}")
+    vlaw = p["raw_visibility_law"]
+    print(f"visibility law (raw): 1 + {vlaw['k']:.2f} * (1 - v)^{vlaw['q']:.2f}")
     print(f"One Euro keeps {p['filter_ratio_visible_median']:.2f} of the visible jitter")
     print(f"wrote {args.out} in {result['seconds']} s ({result['cpu_seconds']} s CPU)")
     return 0

@@ -32,7 +32,7 @@ EDGE_FACTOR = (1.000, 0.999, 0.974, 0.916, 0.853, 0.795, 0.727, 0.641, 0.330, 0.
 # JITTER_A + JITTER_B * (REF_HEIGHT / height) ** JITTER_P ("raw_size_law").
 REF_HEIGHT = 0.6
 JITTER_A = 0.00549
-JITTER_B = 0.00282
+JITTER_B = 0.00270
 JITTER_P = 2.494
 # Factor for a landmark of visibility v: 1 + VIS_K * (1 - v) ** VIS_Q ("raw_visibility_law").
 VIS_K = 12.35
