@@ -11,13 +11,16 @@ in torso lengths in the metric frame:
 
 - error: RMS of filtered minus clean, over every frame of every clip (the objective);
 - fast error: the same over the frames where the wrists move fastest (top 20%), where a
-  filter that lags shows it;
-- lag: the shift (0-10 frames) that best aligns the filtered clean clip with the clean
-  clip on the elbows and wrists, in ms.
+  filter that lags shows it; slow error: over those where they move least (bottom 50%);
+- velocity error: RMS of the frame-to-frame step of filtered minus that of clean (the
+  `body` features hold velocities);
+- lag: the shift (0-10 frames, refined between frames) that best aligns the filtered
+  clean clip with the clean clip on the elbows and wrists, in ms, and the distortion
+  (RMS of filtered clean minus clean there).
 
 Conditions: the person as recorded (about 0.57 of the frame height) at the measured
 jitter (the one that chooses), twice the jitter, and the person at 0.3 and 0.9 of the
-frame height.
+frame height. `best` has the least error; `recommended` the least error + velocity error.
 
     python -m bench.one_euro_tuning [--data DIR]
 
@@ -46,9 +49,9 @@ from proxima.gesture.geometry import to_metric
 RESULTS = Path(__file__).resolve().parent / "results"
 FPS = 30.0
 RESET_AFTER_S = 0.5  # OperatorTracker.reset_after_s
-MIN_CUTOFF = (0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 4.0)
-BETA = (0.0, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
-D_CUTOFF = (0.5, 1.0, 2.0)
+MIN_CUTOFF = (0.25, 0.5, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0)
+BETA = (0.0, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0)
+D_CUTOFF = (0.5, 1.0, 2.0, 4.0)
 CURRENT = (1.0, 30.0, 1.0)  # OperatorTracker's today
 ARMS = [13, 14, 15, 16]
 CONDITIONS = {
@@ -119,37 +122,73 @@ def prepared(clips: Sequence[Clip], condition: dict[str, Any], seed: int) -> lis
 
 def score(data: list[dict], grid: np.ndarray) -> dict[str, np.ndarray]:
     """Error, fast error and lag per grid setting, plus the unfiltered error."""
-    sq = np.zeros(len(grid))
-    sq_fast = np.zeros(len(grid))
-    n = n_fast = 0
-    raw_sq = raw_fast = 0.0
+    sq, sq_fast, sq_slow = np.zeros(len(grid)), np.zeros(len(grid)), np.zeros(len(grid))
+    n = n_fast = n_slow = 0
+    raw_sq = raw_fast = raw_slow = 0.0
     lag_sq = np.zeros((len(grid), MAX_LAG + 1))
-    fast_cut = np.percentile(np.concatenate([d["speed"] for d in data]), 80)
+    arms_n = 0
+    vel_sq, abs_norm = np.zeros(len(grid)), np.zeros(len(grid))
+    raw_vel = raw_abs = 0.0
+    n_vel = 0
+    speeds = np.concatenate([d["speed"] for d in data])
+    fast_cut, slow_cut = np.percentile(speeds, 80), np.percentile(speeds, 50)
     for d in data:
         scale = np.array([d["aspect"], 1.0]) / d["torso"]
         filt = one_euro_batch(d["noisy"][..., :2], d["t"], grid) * scale  # (G, T, 33, 2)
         clean = d["clean"][..., :2] * scale
         err = ((filt - clean) ** 2).sum(-1)  # (G, T, 33)
-        seen, fast = d["seen"], d["speed"] >= fast_cut
+        seen, fast, slow = d["seen"], d["speed"] >= fast_cut, d["speed"] <= slow_cut
         sq += (err * seen).sum((1, 2))
         sq_fast += (err[:, fast] * seen[fast]).sum((1, 2))
-        n += seen.sum()
-        n_fast += seen[fast].sum()
+        sq_slow += (err[:, slow] * seen[slow]).sum((1, 2))
+        n, n_fast, n_slow = n + seen.sum(), n_fast + seen[fast].sum(), n_slow + seen[slow].sum()
         raw = ((d["noisy"][..., :2] * scale - clean) ** 2).sum(-1)
         raw_sq += float((raw * seen).sum())
         raw_fast += float((raw[fast] * seen[fast]).sum())
+        raw_slow += float((raw[slow] * seen[slow]).sum())
+        # Velocity (what the features' frame-to-frame differences see) and mean absolute
+        # error in normalised image units (the tracker docs' earlier figure).
+        both = seen[1:] & seen[:-1]
+        dv = np.diff(filt, axis=1) - np.diff(clean, axis=0)
+        vel_sq += ((dv**2).sum(-1) * both).sum((1, 2))
+        dv_raw = np.diff(d["noisy"][..., :2] * scale, axis=0) - np.diff(clean, axis=0)
+        raw_vel += float(((dv_raw**2).sum(-1) * both).sum())
+        n_vel += both.sum()
+        abs_norm += (np.abs((filt - clean) / scale).mean(-1) * seen).sum((1, 2))
+        raw_abs += float((np.abs(d["noisy"][..., :2] - d["clean"][..., :2]).mean(-1) * seen).sum())
         smooth = one_euro_batch(d["clean"][:, ARMS, :2], d["t"], grid) * scale
         ref = clean[:, ARMS]
         for lag in range(MAX_LAG + 1):
             diff = smooth[:, lag:] - ref[: len(ref) - lag]
-            lag_sq[:, lag] += (diff**2).sum((1, 2, 3))
+            lag_sq[:, lag] += (diff**2).sum((1, 2, 3)) / diff[0].size
+        arms_n += 1
     return {
         "error": np.sqrt(sq / n / 2),
         "fast_error": np.sqrt(sq_fast / n_fast / 2),
-        "lag_ms": lag_sq.argmin(axis=1) * 1000.0 / FPS,
+        "slow_error": np.sqrt(sq_slow / n_slow / 2),
+        "lag_ms": subframe_argmin(lag_sq) * 1000.0 / FPS,
+        "clean_distortion": np.sqrt(lag_sq[:, 0] / arms_n),
+        "velocity_error": np.sqrt(vel_sq / n_vel / 2),
+        "mean_abs_normalised": abs_norm / n,
         "raw_error": np.sqrt(raw_sq / n / 2),
+        "raw_velocity_error": np.full(1, np.sqrt(raw_vel / n_vel / 2)),
+        "raw_mean_abs_normalised": np.full(1, raw_abs / n),
         "raw_fast_error": np.sqrt(raw_fast / n_fast / 2),
+        "raw_slow_error": np.sqrt(raw_slow / n_slow / 2),
     }
+
+
+def subframe_argmin(curve: np.ndarray) -> np.ndarray:
+    """Per row of `curve` (G, L), the argmin refined by a parabola through its
+    neighbours (in frames)."""
+    i = curve.argmin(axis=1)
+    j = np.clip(i, 1, curve.shape[1] - 2)
+    rows = np.arange(len(curve))
+    a, b, c = curve[rows, j - 1], curve[rows, j], curve[rows, j + 1]
+    den = a - 2 * b + c
+    off = np.where(den > 0, 0.5 * (a - c) / np.where(den > 0, den, 1.0), 0.0)
+    return np.where((i > 0) & (i < curve.shape[1] - 1), j + np.clip(off, -0.5, 0.5),
+                    np.maximum(j + np.clip(off, -1, 0.5), 0.0))  # fmt: skip
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -185,6 +224,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Among settings within 2% of the best error, the one with the least lag.
     near = np.flatnonzero(main_s["error"] <= 1.02 * main_s["error"][best])
     least_lag = int(near[np.lexsort((main_s["error"][near], main_s["lag_ms"][near]))[0]])
+    best_velocity = int(np.argmin(main_s["velocity_error"]))
+    # The features hold positions and velocities: the setting best at both together.
+    recommended = int(np.argmin(main_s["error"] + main_s["velocity_error"]))
     order = np.argsort(main_s["error"])
     result = {
         "benchmark": "one_euro_tuning",
@@ -200,11 +242,20 @@ def main(argv: Sequence[str] | None = None) -> int:
             name: {
                 "error": round(float(s["raw_error"]), 5),
                 "fast_error": round(float(s["raw_fast_error"]), 5),
+                "slow_error": round(float(s["raw_slow_error"]), 5),
+                "velocity_error": round(float(s["raw_velocity_error"][0]), 5),
+                "mean_abs_normalised": round(float(s["raw_mean_abs_normalised"][0]), 6),
             }
             for name, s in scores.items()
         },
         "best": row(best),
         "best_within_2pct_least_lag": row(least_lag),
+        "best_velocity": row(best_velocity),
+        "recommended": row(recommended),
+        "recommended_rule": "least error + velocity_error at recorded_x1",
+        "best_per_condition": {
+            name: row(int(np.argmin(sc["error"]))) for name, sc in scores.items()
+        },
         "current": row(current),
         "top10": [row(int(i)) for i in order[:10]],
         "all": [row(i) for i in range(len(grid))],
@@ -212,14 +263,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n")
-    for name, r in (("best", result["best"]), ("least lag", result["best_within_2pct_least_lag"]),
-                    ("current", result["current"])):  # fmt: skip
+    shown = {"best": "best", "least lag": "best_within_2pct_least_lag",
+             "velocity": "best_velocity", "recommended": "recommended",
+             "current": "current"}  # fmt: skip
+    for name, key in shown.items():
+        r = result[key]
         m = r["recorded_x1"]
         print(f"{name:9s} min_cutoff {r['min_cutoff']:g} beta {r['beta']:g} d_cutoff "
               f"{r['d_cutoff']:g}: error {m['error']:.4f} fast {m['fast_error']:.4f} "
+              f"slow {m['slow_error']:.4f} velocity {m['velocity_error']:.4f} "
               f"lag {m['lag_ms']:.0f} ms")  # fmt: skip
     u = result["unfiltered"]["recorded_x1"]
-    print(f"unfiltered: error {u['error']:.4f} fast {u['fast_error']:.4f}")
+    print(f"unfiltered: error {u['error']:.4f} fast {u['fast_error']:.4f} "
+          f"slow {u['slow_error']:.4f} velocity {u['velocity_error']:.4f}")  # fmt: skip
     print(f"batch filter vs OneEuroFilter: max diff {check:.2e}")
     print(f"wrote {args.out} in {result['seconds']} s")
     return 0
