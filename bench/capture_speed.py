@@ -17,13 +17,16 @@ import statistics
 import sys
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.random import Generator
 
-from proxima.gesture.capture import CONDITIONS, condition
-from proxima.gesture.windows import make_windows
+from proxima.gesture.capture import CONDITIONS, CaptureModel, condition
+from proxima.gesture.clip import Clip
+from proxima.gesture.windows import Windows, make_windows
 
 RESULTS = Path(__file__).resolve().parent / "results"
 BATCH = 512
@@ -60,23 +63,21 @@ def main(argv: Sequence[str] | None = None) -> int:
             rng = np.random.default_rng(0)
             clip = clips[len(clips) // 2]
 
-            def windows(b: Any, m: Any = model, g: Any = rng) -> object:
+            def windows(b: Windows, m: CaptureModel = model, g: Generator = rng) -> object:
                 return m.apply_windows(b.xyz, b.vis, g, aspect=b.aspect, has_z=b.has_z,
                                        window=60)  # fmt: skip
 
-            r = {
+            def whole(cs: list[Clip], m: CaptureModel = model, g: Generator = rng) -> object:
+                return [m.apply_clip(c, g) for c in cs]
+
+            r: dict[str, Any] = {
                 "source_frames": need,
-                "one_window_ms": median_ms(lambda o=one: windows(o), args.repeats),
+                "one_window_ms": median_ms(partial(windows, one), args.repeats),
                 "batch_windows": len(batch),
-                "batch_ms": median_ms(lambda b=batch: windows(b), args.repeats),
+                "batch_ms": median_ms(partial(windows, batch), args.repeats),
                 "one_clip_rows": len(clip),
-                "one_clip_ms": median_ms(
-                    lambda m=model, g=rng, c=clip: m.apply_clip(c, g), args.repeats
-                ),
-                "all_clips_ms": median_ms(
-                    lambda m=model, g=rng: [m.apply_clip(c, g) for c in clips],
-                    max(1, args.repeats // 2),
-                ),
+                "one_clip_ms": median_ms(partial(whole, [clip]), args.repeats),
+                "all_clips_ms": median_ms(partial(whole, clips), max(1, args.repeats // 2)),
             }
             r["us_per_window_in_batch"] = round(1000.0 * r["batch_ms"] / len(batch), 1)
             rows[f"{name}:{level}"] = r

@@ -228,7 +228,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     # The features hold positions and velocities: the setting best at both together.
     recommended = int(np.argmin(main_s["error"] + main_s["velocity_error"]))
     order = np.argsort(main_s["error"])
-    result = {
+    result: dict[str, Any] = {
         "benchmark": "one_euro_tuning",
         "command": "python -m bench.one_euro_tuning " + shlex.join(argv or sys.argv[1:]),
         "date": time.strftime("%Y-%m-%d"),

@@ -5,9 +5,10 @@ PoseEstimator`, the live default of 2 poses) followed by the operator tracker's 
 filter (`OperatorTracker`, its defaults). Its input here: still photos of a person
 (matplotlib's grace_hopper.jpg, scikit-image's astronaut.png) placed at the centre of a
 grey 1280x720 (16:9) frame at several sizes, and every frame gets what a real sensor
-adds to a still scene: Gaussian sensor noise (`--noise` grey levels) and a sub-pixel
-shift (uniform +-0.5 px in x and y, by bilinear resampling). The known shift is
-subtracted from the landmarks, so what is left is the estimator's own jitter.
+adds to a still scene: Gaussian sensor noise (`--noise` grey levels in each colour
+channel) and a sub-pixel shift (uniform +-0.5 px in x and y, by bilinear resampling).
+The known shift is subtracted from the landmarks, so what is left is the estimator's
+own jitter.
 
 Person size is the person's height as a fraction of the frame height, defined through
 the torso as the estimator sees it: height = STATURE_TORSO x torso length (shoulder
@@ -30,7 +31,7 @@ frame-to-frame step, before and after the tracker's One Euro filter; then pooled
 visible landmarks' jitter against size and every landmark's against visibility, with
 fits, which `proxima.gesture.capture` uses.
 
-    python -m bench.pose_jitter [--frames 150] [--noise 4]
+    python -m bench.pose_jitter [--frames 150] [--noise 4] [--reanalyse]
 
 Writes bench/results/pose_jitter.json and pose_jitter.png. MediaPipe is heavy: run one
 at a time (`taskset -c 0` keeps it on one core).
@@ -80,9 +81,11 @@ def load_photo(name: str) -> np.ndarray:
     if name == "grace_hopper":
         import matplotlib.cbook as cbook
 
-        with cbook.get_sample_data("grace_hopper.jpg") as fh:
-            data = np.frombuffer(fh.read(), np.uint8)
-        return cv2.imdecode(data, cv2.IMREAD_COLOR)
+        path = cbook.get_sample_data("grace_hopper.jpg", asfileobj=False)
+        image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        if image is None:
+            raise FileNotFoundError(f"cannot read matplotlib's sample photo {path}")
+        return np.asarray(image)
     if name == "astronaut":
         from skimage.data import astronaut
 
@@ -106,14 +109,14 @@ def compose(photo: np.ndarray, scale: float) -> np.ndarray:
 
 def perturb(frame: np.ndarray, dx: float, dy: float, noise: float) -> np.ndarray:
     """`frame` shifted by (dx, dy) pixels (bilinear) plus Gaussian noise of `noise` grey
-    levels (cv2's RNG, seeded by the caller)."""
-    m = np.float32([[1, 0, dx], [0, 1, dy]])
+    levels, independent in each colour channel (cv2's RNG, seeded by the caller)."""
+    m = np.array([[1, 0, dx], [0, 1, dy]], np.float32)
     shifted = cv2.warpAffine(frame, m, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR,
                              borderMode=cv2.BORDER_REPLICATE)  # fmt: skip
     if noise <= 0:
         return shifted
     n = np.empty(frame.shape, np.int16)
-    cv2.randn(n, 0, noise)
+    cv2.randn(n, np.zeros(3), np.full(3, noise))  # one Scalar per channel
     return np.clip(shifted.astype(np.int16) + n, 0, 255).astype(np.uint8)
 
 
@@ -140,7 +143,7 @@ def run_stream(photo: np.ndarray, scales: np.ndarray, noise: float, seed: int,
     n = len(scales)
     raw, filt = np.full((n, 33, 3), np.nan), np.full((n, 33, 3), np.nan)
     vis, found = np.full((n, 33), np.nan), np.zeros(n, bool)
-    base, base_scale = None, None
+    base, base_scale = compose(photo, float(scales[0])), scales[0]
     with PoseEstimator(num_poses=num_poses) as est:
         for k, scale in enumerate(scales):
             if scale != base_scale:
@@ -323,31 +326,6 @@ def size_law(h: np.ndarray, s: np.ndarray) -> dict[str, Any]:
     }
 
 
-def visibility_law(ok: list[dict[str, Any]], kind: str) -> dict[str, Any]:
-    """Fit factor = 1 + k * (1 - visibility) ** q to every landmark's jitter over its
-    run's visible median (least squares on log factor)."""
-    from scipy.optimize import curve_fit
-
-    ratio = np.concatenate(
-        [np.asarray(r[kind]["std_torso_xy"]) / r[f"{kind}_visible"]["std_torso_xy"] for r in ok]
-    )
-    vis = np.concatenate([np.asarray(r["mean_visibility"]) for r in ok])
-
-    def model(v: np.ndarray, k: float, q: float) -> np.ndarray:
-        return np.log(1 + k * (1 - v) ** q)
-
-    (k, q), _ = curve_fit(model, vis, np.log(ratio), p0=[10.0, 1.0],
-                          bounds=([0, 0.05], [1000, 10]))  # fmt: skip
-    resid = model(vis, k, q) - np.log(ratio)
-    return {
-        "form": "jitter factor = 1 + k * (1 - visibility) ** q",
-        "k": float(k),
-        "q": float(q),
-        "rms_log_residual": float(np.sqrt(np.mean(resid**2))),
-        "at": {f"{v}": float(np.exp(model(np.array(v), k, q))) for v in (0.2, 0.5, 0.8, 0.9)},
-    }
-
-
 def by_visibility(ok: list[dict[str, Any]], kind: str) -> list[dict[str, Any]]:
     """Each landmark's jitter over its run's visible median, and its visibility's
     frame-to-frame step, binned by the landmark's mean visibility."""
@@ -371,23 +349,28 @@ def by_visibility(ok: list[dict[str, Any]], kind: str) -> list[dict[str, Any]]:
     return table
 
 
+def visibility_knots(table: list[dict[str, Any]]) -> dict[str, list[float]]:
+    """The jitter factor against visibility as knots for linear interpolation: each
+    bin's median visibility and median factor, made non-increasing with visibility
+    (a landmark never jitters less for being seen less)."""
+    at = [b["median_visibility"] for b in table]
+    factor = np.maximum.accumulate(np.array([b["median_factor"] for b in table])[::-1])[::-1]
+    return {"visibility": at, "factor": factor.tolist()}
+
+
 def pooled(runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """Over all runs: the size law of the visible landmarks' jitter, the visibility
-    factor, the temporal correlation, z and x/y against the visible x/y jitter, and how
-    much of it the One Euro filter keeps."""
+    """Over all runs: per photo, the size law of the visible landmarks' jitter; the
+    reference law (the photo read with less jitter, the other's excess over it); the
+    visibility factor; temporal correlation; z and x/y against the visible x/y jitter;
+    how much of it the One Euro filter keeps."""
     ok = [r for r in runs if "raw" in r]
     out: dict[str, Any] = {}
-    h = np.array([r["height"] for r in ok])
-    for kind in ("raw", "filtered"):
-        s = np.array([r[f"{kind}_visible"]["std_torso_xy"] for r in ok])
-        out[f"{kind}_size_law"] = size_law(h, s)
-        out[f"{kind}_visibility_factor"] = by_visibility(ok, kind)
-        out[f"{kind}_visibility_law"] = visibility_law(ok, kind)
     for photo in sorted({r["photo"] for r in ok}):
         mine = [r for r in ok if r["photo"] == photo]
+        h = np.array([r["height"] for r in mine])
         out[photo] = {
             "runs": len(mine),
-            "height_range": [min(r["height"] for r in mine), max(r["height"] for r in mine)],
+            "height_range": [float(h.min()), float(h.max())],
             "raw_std_torso_xy_median": float(
                 np.median([r["raw_visible"]["std_torso_xy"] for r in mine])
             ),
@@ -395,6 +378,26 @@ def pooled(runs: list[dict[str, Any]]) -> dict[str, Any]:
                 [r["raw_visible"]["autocorr_xy_visible"] for r in mine], axis=0
             ).tolist(),
         }
+        for kind in ("raw", "filtered"):
+            s = np.array([r[f"{kind}_visible"]["std_torso_xy"] for r in mine])
+            out[photo][f"{kind}_size_law"] = size_law(h, s)
+    photos = sorted(out, key=lambda ph: out[ph]["raw_std_torso_xy_median"])
+    ref = photos[0]
+    out["reference_photo"] = ref
+    out["raw_size_law"] = out[ref]["raw_size_law"]
+    out["filtered_size_law"] = out[ref]["filtered_size_law"]
+    law = out["raw_size_law"]
+    for other in photos[1:]:
+        mine = [r for r in ok if r["photo"] == other]
+        expect = [law["a"] + law["b"] * (REF_HEIGHT / r["height"]) ** law["p"] for r in mine]
+        ratio = [r["raw_visible"]["std_torso_xy"] / e for r, e in zip(mine, expect, strict=True)]
+        out[other]["raw_over_reference_law_median"] = float(np.median(ratio))
+    h_all = np.array([r["height"] for r in ok])
+    s_all = np.array([r["raw_visible"]["std_torso_xy"] for r in ok])
+    out["both_photos_size_law"] = size_law(h_all, s_all)
+    for kind in ("raw", "filtered"):
+        out[f"{kind}_visibility_factor"] = by_visibility(ok, kind)
+        out[f"{kind}_visibility_knots"] = visibility_knots(out[f"{kind}_visibility_factor"])
     rv = [r["raw_visible"] for r in ok]
     out["autocorr_xy_visible_median"] = np.median(
         [v["autocorr_xy_visible"] for v in rv], axis=0
@@ -434,7 +437,9 @@ def plot(result: dict[str, Any], path: Path) -> None:
                     color=col, alpha=0.45, mfc="none")  # fmt: skip
     law = result["pooled"]["raw_size_law"]
     hh = np.linspace(0.1, 1.0, 60)
-    ax.plot(hh, law["a"] + law["b"] * (REF_HEIGHT / hh) ** law["p"], "k:", label="fit (raw)")
+    ref = result["pooled"]["reference_photo"]
+    ax.plot(hh, law["a"] + law["b"] * (REF_HEIGHT / hh) ** law["p"], "k:",
+            label=f"fit to {ref} (the model's)")  # fmt: skip
     ax.set(xlabel="person height / frame height", ylabel="jitter std / torso length",
            title=f"visible landmarks (vis >= {VISIBLE}); dotted: One Euro",
            yscale="log")  # fmt: skip
@@ -471,7 +476,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--num-poses", type=int, default=2, help="as the live engine (2)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=RESULTS / "pose_jitter.json")
+    ap.add_argument("--reanalyse", action="store_true",
+                    help="recompute the pooled figures and the PNG from --out's runs "
+                         "(no MediaPipe run)")  # fmt: skip
     args = ap.parse_args(argv)
+    if args.reanalyse:
+        result = json.loads(args.out.read_text())
+        result["pooled"] = pooled(result["runs"])
+        result["reanalysed"] = {"command": "python -m bench.pose_jitter "
+                                + shlex.join(argv or sys.argv[1:]),
+                                "date": time.strftime("%Y-%m-%d")}  # fmt: skip
+        return write(result, args.out)
     if args.frames < WARMUP + 20:
         ap.error(f"--frames must be at least {WARMUP + 20}")
     os.environ.setdefault("GLOG_minloglevel", "2")
@@ -500,16 +515,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     result["pooled"] = pooled(runs)
     result["seconds"] = round(time.perf_counter() - started, 1)
     result["cpu_seconds"] = round(time.process_time() - cpu0, 1)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(_r(result), indent=1) + "\n")
-    plot(result, args.out.with_suffix(".png"))
+    return write(result, args.out)
+
+
+def write(result: dict[str, Any], out: Path) -> int:
+    """Write the JSON and the PNG; print the pooled figures."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(_r(result), indent=1) + "\n")
+    plot(result, out.with_suffix(".png"))
     p = result["pooled"]
     law = p["raw_size_law"]
-    print(f"size law (raw): {law['a']:.4f} + {law['b']:.4f} * (0.6/h)^{law['p']:.2f}")
-    vlaw = p["raw_visibility_law"]
-    print(f"visibility law (raw): 1 + {vlaw['k']:.2f} * (1 - v)^{vlaw['q']:.2f}")
+    print(f"size law ({p['reference_photo']}): {law['a']:.4f} + {law['b']:.4f} "
+          f"* (0.6/h)^{law['p']:.2f}")  # fmt: skip
+    knots = p["raw_visibility_knots"]
+    pairs = zip(knots["visibility"], knots["factor"], strict=True)
+    print("visibility factor: " + ", ".join(f"{f:.2f} at {v:.2f}" for v, f in pairs))
     print(f"One Euro keeps {p['filter_ratio_visible_median']:.2f} of the visible jitter")
-    print(f"wrote {args.out} in {result['seconds']} s ({result['cpu_seconds']} s CPU)")
+    print(f"wrote {out} in {result['seconds']} s ({result['cpu_seconds']} s CPU)")
     return 0
 
 

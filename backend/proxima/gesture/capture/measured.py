@@ -28,52 +28,56 @@ EDGE_FACTOR = (1.000, 0.999, 0.974, 0.916, 0.853, 0.795, 0.727, 0.641, 0.330, 0.
                0.129, 0.074, 0.040)  # fmt: skip
 
 # --- bench/results/pose_jitter.json ("pooled") --------------------------------------
-# Jitter std of the visible landmarks (visibility >= 0.8), torso lengths, per axis:
+# Jitter std of the visible landmarks (visibility >= 0.8), torso lengths, per axis, of a
+# person the estimator reads confidently (the reference photo, the astronaut):
 # JITTER_A + JITTER_B * (REF_HEIGHT / height) ** JITTER_P ("raw_size_law").
 REF_HEIGHT = 0.6
-JITTER_A = 0.00549
-JITTER_B = 0.00270
-JITTER_P = 2.494
-# Factor for a landmark of visibility v: 1 + VIS_K * (1 - v) ** VIS_Q ("raw_visibility_law").
-VIS_K = 12.35
-VIS_Q = 1.156
+JITTER_A = 0.00713
+JITTER_B = 0.00018
+JITTER_P = 3.880
+# A person the estimator reads ambiguously (Grace Hopper: dark clothes, the body's place
+# wavers) jitters this many times more ("grace_hopper": "raw_over_reference_law_median").
+AMBIGUOUS_READING = 6.4
+# Jitter factor against visibility, interpolated between knots (bin medians of every
+# landmark's jitter over its run's visible median, non-increasing; "raw_visibility_knots").
+VIS_FACTOR_AT = (0.228, 0.424, 0.571, 0.851, 0.999)
+VIS_FACTOR = (11.39, 5.58, 5.58, 1.94, 1.0)
 # MediaPipe's z jitters this many times more than x/y, in the metric frame
 # (z * aspect * Z_SCALE, as geometry.to_metric) ("z_over_xy_median").
-Z_OVER_XY = 12.6
+Z_OVER_XY = 23.4
 # Lag-1 autocorrelation of the visible landmarks' jitter ("autocorr_xy_visible_median"):
-# 0.02 pooled, -0.01 for the astronaut, 0.19 for Grace Hopper's ambiguous readings.
+# 0.05 pooled, 0.02 for the reference photo (0.26-0.42 for it below height 0.3).
 JITTER_CORR = 0.0
 # Frame-to-frame step RMS of the visibility itself against the visibility
 # ("raw_visibility_factor": median_visibility, visibility_step_rms).
-VIS_STEP_AT = (0.081, 0.191, 0.408, 0.593, 0.855, 0.999)
-VIS_STEP_RMS = (0.056, 0.101, 0.203, 0.221, 0.129, 0.0012)
+VIS_STEP_AT = VIS_FACTOR_AT
+VIS_STEP_RMS = (0.127, 0.216, 0.213, 0.059, 0.001)
 # Visibility MediaPipe gives body parts absent from the picture but inside the frame
 # (the photos' legs), 25th and 75th percentile ("absent_legs_visibility_p25_p50_p75").
-ABSENT_VISIBILITY = (0.333, 0.543)
+ABSENT_VISIBILITY = (0.379, 0.529)
 # Share of the visible landmarks' jitter the tracker's One Euro filter (beta 30) keeps
 # ("filter_ratio_visible_median"); for the docs, not used by the model.
-ONE_EURO_KEEPS = 0.42
+ONE_EURO_KEEPS = 0.44
 
 
-def jitter_torso(height: np.ndarray) -> np.ndarray:
+def jitter_torso(height: np.ndarray | float) -> np.ndarray:
     """Jitter std (torso lengths, per axis) of a fully visible landmark of a person
     `height` (fraction of the frame height) tall."""
     h = np.maximum(np.asarray(height, np.float64), 0.05)
     return JITTER_A + JITTER_B * (REF_HEIGHT / h) ** JITTER_P
 
 
-def visibility_factor(vis: np.ndarray) -> np.ndarray:
+def visibility_factor(vis: np.ndarray | float) -> np.ndarray:
     """How many times more a landmark of visibility `vis` jitters than a visible one."""
-    v = np.clip(np.asarray(vis, np.float64), 0.0, 1.0)
-    return 1.0 + VIS_K * (1.0 - v) ** VIS_Q
+    return np.asarray(np.interp(vis, VIS_FACTOR_AT, VIS_FACTOR))
 
 
-def visibility_noise_sd(vis: np.ndarray) -> np.ndarray:
+def visibility_noise_sd(vis: np.ndarray | float) -> np.ndarray:
     """Frame-to-frame std of the visibility itself (white: step RMS / sqrt 2)."""
-    return np.interp(vis, VIS_STEP_AT, VIS_STEP_RMS) / np.sqrt(2.0)
+    return np.asarray(np.interp(vis, VIS_STEP_AT, VIS_STEP_RMS)) / np.sqrt(2.0)
 
 
-def edge_factor(distance: np.ndarray) -> np.ndarray:
+def edge_factor(distance: np.ndarray | float) -> np.ndarray:
     """Visibility factor of a landmark `distance` torso lengths outside the nearest frame
     edge (negative inside); constant beyond the measured range."""
-    return np.interp(distance, EDGE_DISTANCE, EDGE_FACTOR)
+    return np.asarray(np.interp(distance, EDGE_DISTANCE, EDGE_FACTOR))

@@ -230,7 +230,7 @@ class CaptureModel:
             CaptureError: arrays of the wrong shape, or times not increasing.
         """
         t = np.asarray(t, np.float64)
-        xyz, visibility = _check(xyz[None], visibility[None], "sequence")
+        xyz, visibility = _check(np.asarray(xyz)[None], np.asarray(visibility)[None], "sequence")
         xyz, visibility = xyz[0], visibility[0]
         if t.shape != (len(xyz),):
             raise CaptureError(f"t: expected shape ({len(xyz)},), got {t.shape}")
@@ -326,6 +326,15 @@ class CaptureModel:
         tau = t_end - j / fps[:, None]  # (N, M), newest first
         valid = tau >= -1e-9
         lost = self._lost(rng, tau, n, max_gap=max_gap_s) & valid
+        # A run of losses never makes a pause over max_gap_s: the live window would
+        # restart there, so no window it classifies holds one. Walking back from the
+        # newest frame, a lost frame is kept when dropping it too would make the pause
+        # from the last kept frame to the next candidate longer than that.
+        last = tau[:, 0].copy()
+        for col in range(1, m - 1):
+            restore = lost[:, col] & (last - tau[:, col + 1] > max_gap_s + 1e-9)
+            lost[:, col] &= ~restore
+            last = np.where(lost[:, col], last, tau[:, col])
         kept = valid & ~lost
         short = w - kept.sum(axis=1)
         # Undo the oldest losses where fewer than W frames survived.
