@@ -480,6 +480,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     help="recompute the pooled figures and the PNG from --out's runs "
                          "(no MediaPipe run)")  # fmt: skip
     args = ap.parse_args(argv)
+    result: dict[str, Any]
     if args.reanalyse:
         result = json.loads(args.out.read_text())
         result["pooled"] = pooled(result["runs"])
@@ -495,7 +496,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     runs = measure(args.photos.split(","), args.frames, args.noise, args.num_poses, args.seed)
     import mediapipe
 
-    result: dict[str, Any] = {
+    result = {
         "benchmark": "pose_jitter",
         "command": "python -m bench.pose_jitter " + shlex.join(argv or sys.argv[1:]),
         "date": time.strftime("%Y-%m-%d"),

@@ -338,6 +338,11 @@ def test_bad_conditions_and_arrays_are_refused(hover_f) -> None:
         condition("roll", 4)
     with pytest.raises(CaptureError, match=r"xyz must be"):
         CaptureModel().apply_windows(np.zeros((2, 60, 17, 3)), np.zeros((2, 60, 17)), _rng())
+    xyz, vis = _xv(hover_f, 60)
+    with pytest.raises(CaptureError, match="one per window"):
+        CaptureModel().apply_windows(xyz, vis, _rng(), aspect=np.ones(len(xyz) + 1))
+    roll: Any = np.float32(5.0)  # numpy numbers are numbers too
+    assert CaptureModel(roll_deg=roll).roll_deg == (5.0, 5.0)
     with pytest.raises(CaptureError, match="increasing"):
         CaptureModel().apply_sequence(np.zeros(5), hover_f.xyz[:5], hover_f.visibility[:5],
                                       _rng())  # fmt: skip

@@ -75,7 +75,7 @@ class CaptureError(ValueError):
 
 def _span(name: str, value: Span, lo: float, hi: float) -> tuple[float, float]:
     """A scalar or (low, high) pair checked against the documented range [lo, hi]."""
-    if isinstance(value, int | float):
+    if isinstance(value, int | float | np.integer | np.floating):
         pair = (float(value), float(value))
     else:
         try:
@@ -288,8 +288,13 @@ class CaptureModel:
         w = s if window is None else int(window)
         if w < 2 or w > s:
             raise CaptureError(f"window: {window} must be 2..{s} (the source window length)")
-        a = np.broadcast_to(np.asarray(aspect, np.float64), (n,)).copy()
-        z = np.broadcast_to(np.asarray(has_z, bool), (n,)).copy()
+        try:
+            a = np.broadcast_to(np.asarray(aspect, np.float64), (n,)).copy()
+            z = np.broadcast_to(np.asarray(has_z, bool), (n,)).copy()
+        except ValueError:
+            raise CaptureError(
+                f"windows: aspect and has_z must be scalars or one per window ({n})"
+            ) from None
         if not self.timing:
             rows = np.broadcast_to(np.arange(s - w, s, dtype=np.float64), (n, w))
             xs, vs = xyz[:, s - w :], visibility[:, s - w :]
