@@ -19,9 +19,10 @@ and the hip and knee points sit at 0.50 and 0.24 of the nose-to-ankle height: th
 line (0.285 H). The landmark heights and widths below are those measured positions
 (`LANDMARK_FRACTIONS`); the limb lengths are Drillis & Contini's.
 
-The spread of each fraction between people of one stature is not in these tables: it is
-drawn here with a 3 % coefficient of variation (an assumption), and a build factor
-(0.88-1.15, also assumed) widens or narrows shoulders, hips and torso depth together.
+The spread of each fraction between people of one stature is not in these tables: each
+segment (and each vertical step between landmarks) is drawn here with a 3 % coefficient
+of variation (an assumption), and a build factor
+(0.92-1.10, also assumed) widens or narrows shoulders, hips and torso depth together.
 """
 
 from __future__ import annotations
@@ -47,16 +48,18 @@ SEGMENT_FRACTIONS: dict[str, float] = {
     "hand": 0.108,
     "foot": 0.152,
     "ankle_height": 0.039,
-    "shoulder_height": 0.818,
-    "chin_height": 0.870,
-    "eye_height": 0.936,
+    "chin_above_shoulder": 0.870 - 0.818,
+    "eye_above_chin": 0.936 - 0.870,
 }
 
 # Where the pose models' points sit, as fractions of stature (measured on LASER and
-# UAV-Gesture, see the module docstring); widths are between the left and right points.
+# UAV-Gesture, see the module docstring): the vertical steps between them (knee above
+# ankle, hip above knee, shoulder above hip: knee at 0.245 H, hip at 0.465 H, shoulder
+# at 0.818 H) and the widths between the left and right points.
 LANDMARK_FRACTIONS: dict[str, float] = {
-    "hip_height": 0.465,
-    "knee_height": 0.245,
+    "shank": 0.245 - 0.039,
+    "thigh": 0.465 - 0.245,
+    "torso": 0.818 - 0.465,
     "shoulder_width": 0.232,  # 0.65 torso lengths (Drillis & Contini biacromial: 0.259)
     "hip_width": 0.135,  # 0.38 torso lengths (bitrochanteric skin width: 0.191)
     "knee_width": 0.11,
@@ -74,7 +77,7 @@ SHAPE_FRACTIONS: dict[str, float] = {
 }
 
 FRACTION_CV = 0.03  # per-person spread of each fraction (assumed)
-BUILD_RANGE = (0.88, 1.15)  # slim .. broad (assumed)
+BUILD_RANGE = (0.92, 1.1)  # slim .. broad (assumed)
 LEFT_HANDED_SHARE = 0.2  # a bit above the population's ~10 %, so both sides are well seen
 
 
@@ -149,13 +152,17 @@ _WIDE = {"shoulder_width", "hip_width", "knee_width", "torso_depth", "upper_arm_
 
 
 def _body(stature: float, build: float, sex: Sex, handedness: Hand, factor) -> BodyShape:  # type: ignore[no-untyped-def]
-    values: dict[str, float] = {}
+    v: dict[str, float] = {}
     for table in (SEGMENT_FRACTIONS, LANDMARK_FRACTIONS, SHAPE_FRACTIONS):
         for name, fraction in table.items():
             scale = build if name in _WIDE else 1.0
-            values[name] = fraction * factor(name) * scale * stature
-    # Heights must stay ordered whatever the draws: ankle < knee < hip < shoulder < chin < eye.
-    values["knee_height"] = min(values["knee_height"], values["hip_height"] - 0.15 * stature)
-    values["chin_height"] = max(values["chin_height"], values["shoulder_height"] + 0.03 * stature)
-    values["eye_height"] = max(values["eye_height"], values["chin_height"] + 0.05 * stature)
-    return BodyShape(sex=sex, handedness=handedness, stature=stature, build=build, **values)
+            v[name] = fraction * factor(name) * scale * stature
+    # Heights are sums of the vertical steps, so they stay ordered whatever the draws.
+    knee = v["ankle_height"] + v.pop("shank")
+    hip = knee + v.pop("thigh")
+    shoulder = hip + v.pop("torso")
+    chin = shoulder + v.pop("chin_above_shoulder")
+    eye = chin + v.pop("eye_above_chin")
+    return BodyShape(sex=sex, handedness=handedness, stature=stature, build=build,
+                     knee_height=knee, hip_height=hip, shoulder_height=shoulder,
+                     chin_height=chin, eye_height=eye, **v)  # fmt: skip

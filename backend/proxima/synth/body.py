@@ -41,9 +41,10 @@ LIMBS: tuple[tuple[int, int, str], ...] = (
 
 # Hand points from the wrist: (along the hand axis in hand lengths, toward the thumb side
 # in hand breadths, toward the palm in breadths). MediaPipe's pose model puts its pinky
-# and index points about half a hand length out (0.14 torso lengths on LASER) and the
-# thumb point a third of the way.
-HAND_POINTS = {"pinky": (0.42, -0.40, 0.0), "index": (0.46, 0.30, 0.0), "thumb": (0.26, 0.58, 0.2)}
+# and index points close together about 0.13 torso lengths out along the forearm (LASER
+# front view, medians; 0.01-0.04 apart across it) and the thumb point at 0.09, up to 0.05
+# to the thumb's side.
+HAND_POINTS = {"pinky": (0.42, -0.15, 0.0), "index": (0.43, 0.15, 0.0), "thumb": (0.31, 0.38, 0.1)}
 
 
 @dataclass
