@@ -20,6 +20,7 @@ import numpy as np
 from proxima.synth.anthropometry import Hand
 from proxima.synth.body import Posture
 from proxima.synth.gestures import IDLE, SPECS
+from proxima.synth.joints import ELEVATION, PLANE
 from proxima.types import GESTURES
 
 IDLE_LABEL = ""  # frames that belong to no gesture
@@ -28,10 +29,11 @@ IDLE_LABEL = ""  # frames that belong to no gesture
 POSE_JITTER_DEG = np.array([6.0, 6.0, 8.0, 7.0, 10.0, 4.0, 4.0])
 REPETITIONS = (3, 8)
 HOLD_S = (3.5, 8.0)
-AMPLITUDE = (0.8, 1.08)
+AMPLITUDE = (0.85, 1.08)
 ENTRY_S = (0.35, 0.7)
 HESITATION_P = 0.3
 HESITATION_S = (0.3, 1.0)
+LOW_ELEVATION = 30.0  # degrees: below it an arm's plane of elevation barely shows
 
 
 @dataclass(frozen=True)
@@ -163,9 +165,15 @@ def _step_track(
     ):
         if peak is None:
             out.append(np.tile(rest, (n, 1)))
-        else:
-            w = wave(np.maximum(phase - lag, 0.0), draw.dwell) * amp
-            out.append(rest + w[:, None] * (np.asarray(peak) - rest))
+            continue
+        w = wave(np.maximum(phase - lag, 0.0), draw.dwell)
+        weights = np.repeat((w * amp)[:, None], 7, axis=1)
+        if rest[ELEVATION] < LOW_ELEVATION:
+            # From a hanging arm the plane of elevation means little: the arm turns into
+            # its plane early and rises in it (a forward raise goes forward all the way),
+            # and the amplitude changes how high it goes, not which way.
+            weights[:, PLANE] = w ** (1 / 3)
+        out.append(rest + weights * (np.asarray(peak) - rest))
     return out[0], out[1]
 
 

@@ -31,7 +31,11 @@ from proxima.synth.body import FACE, LIMBS, TORSO
 from proxima.synth.camera import Camera, mediapipe_z
 
 # MediaPipe's z on LASER is about 1 / Z_SCALE times the metric scale of x (geometry.py):
-# synthetic z gets the same gain, so the feature pipelines treat it like the real one.
+# synthetic z gets the same gain, so the feature pipelines (which turn the body by its z)
+# treat it like the real one. (The limbs' ends come out deeper still in the real side
+# views, 1.2-2 times the torso's gain; giving the synthetic limbs those gains made the
+# real-data model agree less with the synthetic gestures, 0.89 against 0.92, so the gain
+# is one for all landmarks: docs/synth.md.)
 MEDIAPIPE_Z_GAIN = 1.0 / Z_SCALE
 OCCLUDED = 0.12
 MIN_TORSO_PX = 12.0
@@ -154,8 +158,9 @@ def _face_turned_away(world: np.ndarray, camera: Camera) -> np.ndarray:
 
 
 def project_landmarks(world: np.ndarray, camera: Camera, body: BodyShape,
-                      z_gain: float = MEDIAPIPE_Z_GAIN) -> ImageLandmarks:  # fmt: skip
-    """World landmarks (T, 33, 3) (NED metres) -> what `camera` would report."""
+                      z_gain: float | np.ndarray = MEDIAPIPE_Z_GAIN) -> ImageLandmarks:  # fmt: skip
+    """World landmarks (T, 33, 3) (NED metres) -> what `camera` would report. `z_gain`
+    (a number or one per landmark) scales the metric depth into MediaPipe's z."""
     xy, depth = camera.project(world, NEAR)
     hip_depth = (depth[:, 23:24] + depth[:, 24:25]) / 2
     z = mediapipe_z(depth, hip_depth, camera, z_gain)

@@ -10,8 +10,11 @@ A view is `NAME:AZIMUTH:ELEVATION[:DISTANCE]`, each a value or a range `LO..HI`:
 - distance (metres, optional): camera to the operator's torso. Without it the camera
   frames the operator: the stature spans 45-80 % of the image height.
 
-The LASER recordings' views sit at about 0 (front) and 70 degrees to either side at eye
-level (data-notes.md); `DEFAULT_VIEWS` spreads around those three.
+The LASER recordings' views sit at about 0 (front) and 70 degrees to either side
+(data-notes.md), seen from a drone a little above eye level: MediaPipe's depth puts the
+shoulders nearer the camera than the hips and the ankles farther, by what a camera
+10-15 degrees above the horizontal gives (docs/synth.md). `DEFAULT_VIEWS` spreads
+around those three.
 """
 
 from __future__ import annotations
@@ -83,9 +86,9 @@ def parse_view(spec: str) -> ViewRange:
 
 
 DEFAULT_VIEWS = (
-    parse_view("front:-20..20:0..10"),
-    parse_view("right:55..85:0..15"),
-    parse_view("left:-85..-55:0..15"),
+    parse_view("front:-20..20:5..20"),
+    parse_view("right:55..85:5..20"),
+    parse_view("left:-85..-55:5..20"),
 )
 
 
