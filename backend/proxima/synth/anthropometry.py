@@ -22,7 +22,7 @@ line (0.285 H). The landmark heights and widths below are those measured positio
 The spread of each fraction between people of one stature is not in these tables: each
 segment (and each vertical step between landmarks) is drawn here with a 3 % coefficient
 of variation (an assumption), and a build factor
-(0.92-1.10, also assumed) widens or narrows shoulders, hips and torso depth together.
+(0.94-1.08, also assumed) widens or narrows shoulders, hips and torso depth together.
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ SHAPE_FRACTIONS: dict[str, float] = {
 }
 
 FRACTION_CV = 0.03  # per-person spread of each fraction (assumed)
-BUILD_RANGE = (0.92, 1.1)  # slim .. broad (assumed)
+BUILD_RANGE = (0.94, 1.08)  # slim .. broad (assumed)
 LEFT_HANDED_SHARE = 0.2  # a bit above the population's ~10 %, so both sides are well seen
 
 

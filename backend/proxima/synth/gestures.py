@@ -97,7 +97,7 @@ SPECS: dict[str, GestureSpec] = {
         ),
         GestureSpec(
             "have_command",
-            right=ArmMotion(IDLE, arm(plane=75, elevation=118, rotation=0, elbow=30, pronation=0)),
+            right=ArmMotion(IDLE, arm(plane=75, elevation=125, rotation=0, elbow=30, pronation=0)),
             left=ArmMotion(IDLE),
             period_s=(1.05, 1.6), dwell=(1.3, 2.2), handed=True,
             arms="dominant arm; the other hangs",
