@@ -49,8 +49,9 @@ def trained_on_real_only(metadata: dict[str, Any]) -> tuple[bool, list[str]]:
     return ok, folders
 
 
-def agreement(checkpoint: Path | None, views: list[str], scenes_per_view: int, seed: int,
-              stride: int) -> dict[str, Any]:  # fmt: skip
+def agreement(
+    checkpoint: Path | None, views: list[str], scenes_per_view: int, seed: int, stride: int
+) -> dict[str, Any]:
     import torch
 
     from proxima.gesture.classifier import GestureClassifier, default_checkpoint
@@ -85,11 +86,16 @@ def agreement(checkpoint: Path | None, views: list[str], scenes_per_view: int, s
             "agreement": round(float(np.mean(pred[sel] == g)), 3),
             "own_probability": round(float(probs[sel, g].mean()), 3),
             "read_as": {k: round(v / sel.sum(), 3) for k, v in goes.most_common(3)},
-            "per_view": {v.name: round(float(np.mean(pred[sel & (views_w == v.name)] == g)), 3)
-                         for v in view_ranges if np.any(sel & (views_w == v.name))},
-        }  # fmt: skip
-    per_view = {v.name: round(float(np.mean(pred[views_w == v.name] == w.labels[views_w == v.name])), 3)
-                for v in view_ranges}  # fmt: skip
+            "per_view": {
+                v.name: round(float(np.mean(pred[sel & (views_w == v.name)] == g)), 3)
+                for v in view_ranges
+                if np.any(sel & (views_w == v.name))
+            },
+        }
+    per_view = {
+        v.name: round(float(np.mean(pred[views_w == v.name] == w.labels[views_w == v.name])), 3)
+        for v in view_ranges
+    }
     return {
         "command": "python -m bench.synth_agreement " + shlex.join(sys.argv[1:]),
         "checkpoint": str(ckpt),
@@ -115,8 +121,10 @@ def agreement(checkpoint: Path | None, views: list[str], scenes_per_view: int, s
 
 def table(result: dict[str, Any]) -> str:
     views = list(result["per_view"])
-    lines = ["| gesture | agreement | " + " | ".join(views) + " | read as (share) |",
-             "|---|---|" + "---|" * len(views) + "---|"]  # fmt: skip
+    lines = [
+        "| gesture | agreement | " + " | ".join(views) + " | read as (share) |",
+        "|---|---|" + "---|" * len(views) + "---|",
+    ]
     for g, r in result["per_gesture"].items():
         read = ", ".join(f"{k} {v:.2f}" for k, v in r["read_as"].items())
         cells = " | ".join(f"{r['per_view'].get(v, float('nan')):.2f}" for v in views)
@@ -129,8 +137,12 @@ def table(result: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--checkpoint", type=Path, default=None)
-    ap.add_argument("--view", action="append", default=None,
-                    help="view range (repeatable); default: the three LASER-like views")  # fmt: skip
+    ap.add_argument(
+        "--view",
+        action="append",
+        default=None,
+        help="view range (repeatable); default: the three LASER-like views",
+    )
     ap.add_argument("--scenes-per-view", type=int, default=6)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--stride", type=int, default=5)
@@ -141,8 +153,10 @@ def main(argv: list[str] | None = None) -> None:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1))
     print(table(result))
-    print(f"{result['clips']} clips, {result['windows']} windows; generation "
-          f"{result['seconds_per_clip'] * 1000:.0f} ms a clip; -> {args.out}")  # fmt: skip
+    print(
+        f"{result['clips']} clips, {result['windows']} windows; generation "
+        f"{result['seconds_per_clip'] * 1000:.0f} ms a clip; -> {args.out}"
+    )
 
 
 if __name__ == "__main__":

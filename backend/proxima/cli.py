@@ -19,6 +19,9 @@ def _register_all() -> None:
     from proxima.gesture import commands as gesture_commands
 
     gesture_commands.register(app)
+    from proxima.synth import cli as synth_cli
+
+    synth_cli.register(app)
     from proxima.engine import commands as engine_commands
 
     engine_commands.register(app)

@@ -142,13 +142,23 @@ def sample_body(
     _, median, _ = STATURE_PERCENTILES[sex]
     stature = float(np.clip(rng.normal(median, stature_sd(sex)), median - 0.25, median + 0.25))
     build = float(rng.uniform(*BUILD_RANGE))
-    factors = {name: float(np.clip(rng.normal(1.0, FRACTION_CV), 0.9, 1.1))
-               for name in (*SEGMENT_FRACTIONS, *LANDMARK_FRACTIONS, *SHAPE_FRACTIONS)}  # fmt: skip
+    factors = {
+        name: float(np.clip(rng.normal(1.0, FRACTION_CV), 0.9, 1.1))
+        for name in (*SEGMENT_FRACTIONS, *LANDMARK_FRACTIONS, *SHAPE_FRACTIONS)
+    }
     return _body(stature, build, sex, handedness, factors.__getitem__)
 
 
-_WIDE = {"shoulder_width", "hip_width", "knee_width", "torso_depth", "upper_arm_radius",
-         "forearm_radius", "thigh_radius", "shank_radius"}  # fmt: skip
+_WIDE = {
+    "shoulder_width",
+    "hip_width",
+    "knee_width",
+    "torso_depth",
+    "upper_arm_radius",
+    "forearm_radius",
+    "thigh_radius",
+    "shank_radius",
+}
 
 
 def _body(stature: float, build: float, sex: Sex, handedness: Hand, factor) -> BodyShape:  # type: ignore[no-untyped-def]
@@ -163,6 +173,15 @@ def _body(stature: float, build: float, sex: Sex, handedness: Hand, factor) -> B
     shoulder = hip + v.pop("torso")
     chin = shoulder + v.pop("chin_above_shoulder")
     eye = chin + v.pop("eye_above_chin")
-    return BodyShape(sex=sex, handedness=handedness, stature=stature, build=build,
-                     knee_height=knee, hip_height=hip, shoulder_height=shoulder,
-                     chin_height=chin, eye_height=eye, **v)  # fmt: skip
+    return BodyShape(
+        sex=sex,
+        handedness=handedness,
+        stature=stature,
+        build=build,
+        knee_height=knee,
+        hip_height=hip,
+        shoulder_height=shoulder,
+        chin_height=chin,
+        eye_height=eye,
+        **v,
+    )

@@ -22,22 +22,53 @@ from proxima.synth.anthropometry import BodyShape
 from proxima.synth.joints import arm_directions, clamp_arm, torso_frame
 
 LANDMARK_NAMES: tuple[str, ...] = (
-    "nose", "left_eye_inner", "left_eye", "left_eye_outer", "right_eye_inner", "right_eye",
-    "right_eye_outer", "left_ear", "right_ear", "mouth_left", "mouth_right", "left_shoulder",
-    "right_shoulder", "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_pinky",
-    "right_pinky", "left_index", "right_index", "left_thumb", "right_thumb", "left_hip",
-    "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle", "left_heel",
-    "right_heel", "left_foot_index", "right_foot_index",
-)  # fmt: skip
+    "nose",
+    "left_eye_inner",
+    "left_eye",
+    "left_eye_outer",
+    "right_eye_inner",
+    "right_eye",
+    "right_eye_outer",
+    "left_ear",
+    "right_ear",
+    "mouth_left",
+    "mouth_right",
+    "left_shoulder",
+    "right_shoulder",
+    "left_elbow",
+    "right_elbow",
+    "left_wrist",
+    "right_wrist",
+    "left_pinky",
+    "right_pinky",
+    "left_index",
+    "right_index",
+    "left_thumb",
+    "right_thumb",
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_ankle",
+    "right_ankle",
+    "left_heel",
+    "right_heel",
+    "left_foot_index",
+    "right_foot_index",
+)
 FACE = tuple(range(11))
 TORSO = (11, 12, 23, 24)
 # Limb segments (landmark pairs) with the BodyShape field holding their radius.
 LIMBS: tuple[tuple[int, int, str], ...] = (
-    (11, 13, "upper_arm_radius"), (13, 15, "forearm_radius"),
-    (12, 14, "upper_arm_radius"), (14, 16, "forearm_radius"),
-    (23, 25, "thigh_radius"), (25, 27, "shank_radius"),
-    (24, 26, "thigh_radius"), (26, 28, "shank_radius"),
-)  # fmt: skip
+    (11, 13, "upper_arm_radius"),
+    (13, 15, "forearm_radius"),
+    (12, 14, "upper_arm_radius"),
+    (14, 16, "forearm_radius"),
+    (23, 25, "thigh_radius"),
+    (25, 27, "shank_radius"),
+    (24, 26, "thigh_radius"),
+    (26, 28, "shank_radius"),
+)
 
 # Hand points from the wrist: (along the hand axis in hand lengths, toward the thumb side
 # in hand breadths, toward the palm in breadths). MediaPipe's pose model puts its pinky
@@ -113,8 +144,9 @@ def _rot(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
 _X, _Y, _Z = np.eye(3)
 
 
-def _two_bone_knee(hip: np.ndarray, ankle: np.ndarray, thigh: float, shank: float,
-                   forward: np.ndarray) -> np.ndarray:  # fmt: skip
+def _two_bone_knee(
+    hip: np.ndarray, ankle: np.ndarray, thigh: float, shank: float, forward: np.ndarray
+) -> np.ndarray:
     """Knee positions (T, 3) between hip and ankle, bending toward `forward`."""
     d_vec = ankle - hip
     d = np.linalg.norm(d_vec, axis=-1, keepdims=True)
@@ -128,8 +160,9 @@ def _two_bone_knee(hip: np.ndarray, ankle: np.ndarray, thigh: float, shank: floa
 
 
 def _leg_lengths(body: BodyShape) -> tuple[float, float]:
-    thigh = float(np.hypot(body.hip_height - body.knee_height,
-                           (body.hip_width - body.knee_width) / 2))  # fmt: skip
+    thigh = float(
+        np.hypot(body.hip_height - body.knee_height, (body.hip_width - body.knee_width) / 2)
+    )
     return thigh, body.knee_height - body.ankle_height
 
 
@@ -161,8 +194,8 @@ def body_landmarks(body: BodyShape, posture: Posture, stance: Stance | None = No
     pelvis = np.zeros((T, 3))
     pelvis[:, 2] = body.ankle_height + np.sqrt(np.maximum(reach**2 - spread**2, 1e-6))
     pelvis += posture.pelvis
-    out[:, 23] = pelvis + [0, body.hip_width / 2, 0]
-    out[:, 24] = pelvis - [0, body.hip_width / 2, 0]
+    out[:, 23] = pelvis + np.array([0.0, body.hip_width / 2, 0.0])
+    out[:, 24] = pelvis - np.array([0.0, body.hip_width / 2, 0.0])
     fwd = np.broadcast_to(_X, (T, 3))
     out[:, 25] = _two_bone_knee(out[:, 23], out[:, 27], thigh, shank, fwd)
     out[:, 26] = _two_bone_knee(out[:, 24], out[:, 28], thigh, shank, fwd)
@@ -187,8 +220,10 @@ def body_landmarks(body: BodyShape, posture: Posture, stance: Stance | None = No
         out[:, w_i] = out[:, e_i] + body.forearm * world["f"]
         for j, name in zip((s_i + 6, s_i + 8, s_i + 10), ("pinky", "index", "thumb"), strict=True):
             along, thumb, palm = HAND_POINTS[name]
-            out[:, j] = out[:, w_i] + (body.hand * along * world["h"]
-                                       + body.hand_breadth * (thumb * world["t"] + palm * world["p"]))  # fmt: skip
+            out[:, j] = out[:, w_i] + (
+                body.hand * along * world["h"]
+                + body.hand_breadth * (thumb * world["t"] + palm * world["p"])
+            )
 
     # Head: pivots at the neck above the shoulders' midpoint, turns relative to the trunk.
     hd = np.deg2rad(posture.head)
@@ -199,18 +234,30 @@ def body_landmarks(body: BodyShape, posture: Posture, stance: Stance | None = No
     ez = body.eye_height - body.shoulder_height - pivot_up
     mz = ez + 0.75 * (body.chin_height - body.eye_height)  # the mouth, most of the way to the chin
     hw = body.head_width / 2
-    face = np.array([
-        [0.064 * H, 0.0, ez - 0.031 * H],  # nose
-        [0.056 * H, 0.010 * H, ez], [0.054 * H, 0.018 * H, ez], [0.049 * H, 0.027 * H, ez],
-        [0.056 * H, -0.010 * H, ez], [0.054 * H, -0.018 * H, ez], [0.049 * H, -0.027 * H, ez],
-        [0.0, hw, ez - 0.006 * H], [0.0, -hw, ez - 0.006 * H],  # ears
-        [0.056 * H, 0.013 * H, mz], [0.056 * H, -0.013 * H, mz],  # mouth
-    ])  # fmt: skip
+    face = np.array(
+        [
+            [0.064 * H, 0.0, ez - 0.031 * H],  # nose
+            [0.056 * H, 0.010 * H, ez],
+            [0.054 * H, 0.018 * H, ez],
+            [0.049 * H, 0.027 * H, ez],
+            [0.056 * H, -0.010 * H, ez],
+            [0.054 * H, -0.018 * H, ez],
+            [0.049 * H, -0.027 * H, ez],
+            [0.0, hw, ez - 0.006 * H],
+            [0.0, -hw, ez - 0.006 * H],  # ears
+            [0.056 * H, 0.013 * H, mz],
+            [0.056 * H, -0.013 * H, mz],  # mouth
+        ]
+    )
     out[:, :11] = pivot[:, None] + np.einsum("tij,kj->tki", head_rot, face)
     return out
 
 
-def world_landmarks(body: BodyShape, posture: Posture, placement: Placement | None = None,
-                    stance: Stance | None = None) -> np.ndarray:  # fmt: skip
+def world_landmarks(
+    body: BodyShape,
+    posture: Posture,
+    placement: Placement | None = None,
+    stance: Stance | None = None,
+) -> np.ndarray:
     """(T, 33, 3) landmark positions in the world (NED metres)."""
     return (placement or Placement()).to_world(body_landmarks(body, posture, stance))

@@ -106,9 +106,13 @@ class Camera:
         return cls(**d)
 
     @classmethod
-    def looking_at(cls, position: np.ndarray | tuple[float, float, float],
-                   target: np.ndarray | tuple[float, float, float], roll_deg: float = 0.0,
-                   **intrinsics: float | int) -> Camera:  # fmt: skip
+    def looking_at(
+        cls,
+        position: np.ndarray | tuple[float, float, float],
+        target: np.ndarray | tuple[float, float, float],
+        roll_deg: float = 0.0,
+        **intrinsics: float | int,
+    ) -> Camera:
         """A camera at `position` whose optical axis passes through `target` (both NED).
 
         Raises:

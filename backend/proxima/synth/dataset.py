@@ -65,17 +65,27 @@ class Scene:
     camera: CameraDraw
 
     def to_dict(self) -> dict[str, object]:
-        return {"scene": self.index, "subject": self.subject, "body": self.body.to_dict(),
-                "stance": {"foot_width": round(self.stance.foot_width, 4),
-                           "toe_out_deg": round(self.stance.toe_out_deg, 2)},
-                "placement": {"north": self.placement.north, "east": self.placement.east,
-                              "down": self.placement.down,
-                              "heading_deg": round(self.placement.heading_deg, 3)},
-                **self.camera.to_dict()}  # fmt: skip
+        return {
+            "scene": self.index,
+            "subject": self.subject,
+            "body": self.body.to_dict(),
+            "stance": {
+                "foot_width": round(self.stance.foot_width, 4),
+                "toe_out_deg": round(self.stance.toe_out_deg, 2),
+            },
+            "placement": {
+                "north": self.placement.north,
+                "east": self.placement.east,
+                "down": self.placement.down,
+                "heading_deg": round(self.placement.heading_deg, 3),
+            },
+            **self.camera.to_dict(),
+        }
 
 
-def make_scene(seed: int, index: int, view: ViewRange, width: int = 1920,
-               height: int = 1080) -> Scene:  # fmt: skip
+def make_scene(
+    seed: int, index: int, view: ViewRange, width: int = 1920, height: int = 1080
+) -> Scene:
     """Scene `index` of a data set: its body, stance, placement and camera."""
     rng = np.random.default_rng([seed, index, 0])
     body = sample_body(rng)
@@ -90,8 +100,10 @@ def make_scene(seed: int, index: int, view: ViewRange, width: int = 1920,
 def perform_clip(scene: Scene, gesture: str, seed: int, fps: float = FPS) -> Performance:
     """The performance of one clip: a short idle stance, then the gesture."""
     rng = np.random.default_rng([seed, scene.index, 1 + GESTURES.index(gesture)])
-    steps = [draw_gesture(IDLE_LABEL, rng, duration_s=float(rng.uniform(0.2, 1.0))),
-             draw_gesture(gesture, rng, scene.body.handedness)]  # fmt: skip
+    steps = [
+        draw_gesture(IDLE_LABEL, rng, duration_s=float(rng.uniform(0.2, 1.0))),
+        draw_gesture(gesture, rng, scene.body.handedness),
+    ]
     # The operator looks toward the camera, partly turning the head.
     head = float(np.clip(-scene.camera.azimuth_deg * rng.uniform(0.2, 0.7), -60, 60))
     return perform(steps, rng, fps, head_turn_deg=head)
@@ -100,9 +112,17 @@ def perform_clip(scene: Scene, gesture: str, seed: int, fps: float = FPS) -> Per
 def image_clip(name: str, gesture: str, scene: Scene, seen: ImageLandmarks) -> Clip:
     """The detected frames of a projection as a Clip (frame numbers from 1, with gaps)."""
     keep = np.flatnonzero(seen.detected)
-    return Clip(name=name, gesture=gesture, view=scene.camera.laser_view, subject=scene.subject,
-                source=SOURCE, frames=keep + 1, xyz=seen.xyz[keep],
-                visibility=seen.visibility[keep], aspect=seen.aspect)  # fmt: skip
+    return Clip(
+        name=name,
+        gesture=gesture,
+        view=scene.camera.laser_view,
+        subject=scene.subject,
+        source=SOURCE,
+        frames=keep + 1,
+        xyz=seen.xyz[keep],
+        visibility=seen.visibility[keep],
+        aspect=seen.aspect,
+    )
 
 
 def write_csv(path: Path, clip: Clip) -> None:
@@ -177,24 +197,40 @@ def generate(
             fname = file_name(k + 1, gesture_name, scene.camera.laser_view)
             if len(clip):
                 write_csv(tmp / fname, clip)
-            entries.append({
-                "file": fname if len(clip) else None, "name": name, "gesture": gesture_name,
-                "scene": index, "subject": scene.subject, "view": scene.camera.laser_view,
-                "view_name": scene.camera.view, "frames": len(perf), "detected": len(clip),
-                "aspect": round(seen.aspect, 6),
-                "segments": [{"label": s[0], "start": s[1], "onset": s[2], "end": s[3]}
-                             for s in perf.segments],
-                "steps": [d.to_dict() for d in perf.draws],
-            })  # fmt: skip
+            entries.append(
+                {
+                    "file": fname if len(clip) else None,
+                    "name": name,
+                    "gesture": gesture_name,
+                    "scene": index,
+                    "subject": scene.subject,
+                    "view": scene.camera.laser_view,
+                    "view_name": scene.camera.view,
+                    "frames": len(perf),
+                    "detected": len(clip),
+                    "aspect": round(seen.aspect, 6),
+                    "segments": [
+                        {"label": s[0], "start": s[1], "onset": s[2], "end": s[3]}
+                        for s in perf.segments
+                    ],
+                    "steps": [d.to_dict() for d in perf.draws],
+                }
+            )
             if on_clip:
                 on_clip(k, gesture_name)
         manifest: dict[str, object] = {
-            "format": FORMAT, "command": command, "seed": seed, "clips": clips, "fps": fps,
-            "resolution": list(resolution), "views": [v.spec() for v in views],
+            "format": FORMAT,
+            "command": command,
+            "seed": seed,
+            "clips": clips,
+            "fps": fps,
+            "resolution": list(resolution),
+            "views": [v.spec() for v in views],
             "capture": None if capture is None else type(capture).__name__,
             "seconds": round(time.perf_counter() - t0, 2),
-            "scenes": [s.to_dict() for s in scenes], "clip_list": entries,
-        }  # fmt: skip
+            "scenes": [s.to_dict() for s in scenes],
+            "clip_list": entries,
+        }
         (tmp / MANIFEST).write_text(json.dumps(manifest, indent=1))
         if out.exists():
             shutil.rmtree(out)
@@ -260,9 +296,16 @@ def load_synth_dir(path: str | Path) -> list[Clip]:
             raise DataError(
                 f"{path / fname}: gesture {clip.gesture!r} but the manifest says {gesture!r}"
             )
-        clips.append(replace(clip, source=SOURCE, name=str(meta["name"]),
-                             subject=str(meta["subject"]), view=str(meta["view"]),
-                             aspect=float(meta["aspect"])))  # fmt: skip
+        clips.append(
+            replace(
+                clip,
+                source=SOURCE,
+                name=str(meta["name"]),
+                subject=str(meta["subject"]),
+                view=str(meta["view"]),
+                aspect=float(meta["aspect"]),
+            )
+        )
     if not clips:
         raise DataError(f"{path}: the synthetic data set holds no clips")
     return clips

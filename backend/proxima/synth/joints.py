@@ -174,13 +174,14 @@ def limit_violations(
         elev, plane = a["elevation"], a["plane"]
         defined = elev > 10
         checks = {
-            "elbow flexion": (a["elbow"] < limits.elbow[0] - tol) | (a["elbow"] > limits.elbow[1] + tol),
+            "elbow flexion": (a["elbow"] < limits.elbow[0] - tol)
+            | (a["elbow"] > limits.elbow[1] + tol),
             "plane of elevation": defined
             & ((plane < limits.plane[0] - tol) | (plane > limits.plane[1] + tol)),
             "elevation": elev > limits.max_elevation(np.clip(plane, *limits.plane)) + tol,
             "axial rotation": (a["rotation"] < limits.rotation[0] - tol)
             | (a["rotation"] > limits.rotation[1] + tol),
-        }  # fmt: skip
+        }
         for name, bad in checks.items():
             if np.any(bad):
                 i = int(np.flatnonzero(bad)[0])

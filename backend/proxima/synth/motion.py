@@ -106,9 +106,15 @@ def draw_gesture(
     hes_s = float(rng.uniform(*HESITATION_S)) if rng.random() < HESITATION_P else 0.0
     if spec.period_s is None:
         d = float(duration_s if duration_s is not None else rng.uniform(*HOLD_S))
-        return GestureDraw(gesture, d + hes_s, entry, rest_r, rest_l,
-                           hesitation_at_s=float(rng.uniform(0.2, 0.8) * d),
-                           hesitation_s=hes_s)  # fmt: skip
+        return GestureDraw(
+            gesture,
+            d + hes_s,
+            entry,
+            rest_r,
+            rest_l,
+            hesitation_at_s=float(rng.uniform(0.2, 0.8) * d),
+            hesitation_s=hes_s,
+        )
     period = float(rng.uniform(*spec.period_s))
     if duration_s is not None:
         reps = duration_s / period
@@ -117,11 +123,21 @@ def draw_gesture(
     # A hesitation falls at the end of a swing (at rest or at the peak).
     half = int(rng.integers(1, max(int(2 * reps), 2)))
     return GestureDraw(
-        gesture, reps * period + hes_s, entry, rest_r, rest_l, peak_r, peak_l, period, reps,
-        amplitude=float(rng.uniform(*AMPLITUDE)), dwell=float(rng.uniform(*spec.dwell)),
-        lag_cycles=float(rng.normal(0.0, 0.03)), hesitation_at_s=half * period / 2,
+        gesture,
+        reps * period + hes_s,
+        entry,
+        rest_r,
+        rest_l,
+        peak_r,
+        peak_l,
+        period,
+        reps,
+        amplitude=float(rng.uniform(*AMPLITUDE)),
+        dwell=float(rng.uniform(*spec.dwell)),
+        lag_cycles=float(rng.normal(0.0, 0.03)),
+        hesitation_at_s=half * period / 2,
         hesitation_s=hes_s,
-    )  # fmt: skip
+    )
 
 
 def wave(phase: np.ndarray, dwell: float) -> np.ndarray:
@@ -133,8 +149,9 @@ def wave(phase: np.ndarray, dwell: float) -> np.ndarray:
     return a / np.maximum(a + b, 1e-12)
 
 
-def smooth_noise(rng: np.random.Generator, n: int, fps: float, hz: float,
-                 dims: int = 1) -> np.ndarray:  # fmt: skip
+def smooth_noise(
+    rng: np.random.Generator, n: int, fps: float, hz: float, dims: int = 1
+) -> np.ndarray:
     """(n, dims) slow random motion of unit variance: three sinusoids per dimension,
     frequencies 0.5-1.5 x `hz`, random phases."""
     t = np.arange(n)[:, None, None] / fps

@@ -71,14 +71,16 @@ def parse_view(spec: str) -> ViewRange:
     """
     fields = spec.split(":")
     if len(fields) not in (3, 4) or not fields[0]:
-        raise ValueError(f"view {spec!r}: expected NAME:AZIMUTH:ELEVATION[:DISTANCE], "
-                         "e.g. front:-20..20:0..10 or above:0..360:30..60:6..12")  # fmt: skip
+        raise ValueError(
+            f"view {spec!r}: expected NAME:AZIMUTH:ELEVATION[:DISTANCE], "
+            "e.g. front:-20..20:0..10 or above:0..360:30..60:6..12"
+        )
     az = _range(fields[1], "azimuth", spec)
     el = _range(fields[2], "elevation", spec)
     dist = _range(fields[3], "distance", spec) if len(fields) == 4 else None
-    if not (-360 <= az[0] and az[1] <= 360):
+    if not (az[0] >= -360 and az[1] <= 360):
         raise ValueError(f"view {spec!r}: azimuth must lie in -360..360 degrees")
-    if not (-30 <= el[0] and el[1] <= 89):
+    if not (el[0] >= -30 and el[1] <= 89):
         raise ValueError(f"view {spec!r}: elevation must lie in -30..89 degrees")
     if dist is not None and dist[0] < 0.3:
         raise ValueError(f"view {spec!r}: distance must be at least 0.3 m")
@@ -116,27 +118,44 @@ class CameraDraw:
         return laser_view(self.azimuth_deg)
 
     def to_dict(self) -> dict[str, object]:
-        return {"view": self.view, "azimuth_deg": round(self.azimuth_deg, 3),
-                "elevation_deg": round(self.elevation_deg, 3),
-                "distance_m": round(self.distance_m, 3), "laser_view": self.laser_view,
-                "camera": self.camera.to_dict()}  # fmt: skip
+        return {
+            "view": self.view,
+            "azimuth_deg": round(self.azimuth_deg, 3),
+            "elevation_deg": round(self.elevation_deg, 3),
+            "distance_m": round(self.distance_m, 3),
+            "laser_view": self.laser_view,
+            "camera": self.camera.to_dict(),
+        }
 
 
-def orbit_camera(placement: Placement, target_height: float, azimuth_deg: float,
-                 elevation_deg: float, distance_m: float, **intrinsics: float | int) -> Camera:  # fmt: skip
+def orbit_camera(
+    placement: Placement,
+    target_height: float,
+    azimuth_deg: float,
+    elevation_deg: float,
+    distance_m: float,
+    **intrinsics: float | int,
+) -> Camera:
     """A camera `distance_m` from the operator's point at `target_height` metres above
     the ground, at a bearing `azimuth_deg` from the operator's facing (clockwise) and
     `elevation_deg` above the horizontal, looking at that point."""
     target = np.array([placement.north, placement.east, placement.down - target_height])
     bearing = np.deg2rad(placement.heading_deg + azimuth_deg)
     el = np.deg2rad(elevation_deg)
-    offset = distance_m * np.array([np.cos(el) * np.cos(bearing), np.cos(el) * np.sin(bearing),
-                                    -np.sin(el)])  # fmt: skip
+    offset = distance_m * np.array(
+        [np.cos(el) * np.cos(bearing), np.cos(el) * np.sin(bearing), -np.sin(el)]
+    )
     return Camera.looking_at(target + offset, target, **intrinsics)
 
 
-def sample_camera(view: ViewRange, rng: np.random.Generator, body: BodyShape,
-                  placement: Placement, width: int = 1920, height: int = 1080) -> CameraDraw:  # fmt: skip
+def sample_camera(
+    view: ViewRange,
+    rng: np.random.Generator,
+    body: BodyShape,
+    placement: Placement,
+    width: int = 1920,
+    height: int = 1080,
+) -> CameraDraw:
     """A camera drawn from a view range: azimuth, elevation, field of view, distance (or
     framing), a small roll, and an aim off the operator's centre that keeps the body in
     the picture."""
@@ -158,6 +177,13 @@ def sample_camera(view: ViewRange, rng: np.random.Generator, body: BodyShape,
     slack = max(1.0 - framing, 0.0)  # aim off centre only as far as the framing allows
     yaw_off = float(rng.uniform(-0.35, 0.35)) * slack * hfov / 2
     pitch_off = float(rng.uniform(-0.3, 0.3)) * slack * probe.vfov_deg / 2
-    cam = Camera(base.position, base.yaw_deg + yaw_off, base.pitch_deg + pitch_off,
-                 float(rng.normal(0.0, 2.0)), hfov, width, height)  # fmt: skip
+    cam = Camera(
+        base.position,
+        base.yaw_deg + yaw_off,
+        base.pitch_deg + pitch_off,
+        float(rng.normal(0.0, 2.0)),
+        hfov,
+        width,
+        height,
+    )
     return CameraDraw(view.name, az, el, dist, cam)
