@@ -42,14 +42,18 @@ def synth(
 
     try:
         view_ranges = [parse_view(v) for v in views] if views else list(DEFAULT_VIEWS)
-        width, _, height = resolution.lower().partition("x")
-        size = (int(width), int(height))
-        if size[0] < 1 or size[1] < 1:
-            raise ValueError
     except ValueError as exc:
-        text = str(exc) or f"--resolution {resolution!r}: expected WIDTHxHEIGHT, e.g. 1920x1080"
-        typer.secho(f"error: {text}", fg="red", err=True)
+        typer.secho(f"error: {exc}", fg="red", err=True)
         raise typer.Exit(2) from None
+    width, _, height = resolution.lower().partition("x")
+    if not (width.isdigit() and height.isdigit() and int(width) > 0 and int(height) > 0):
+        typer.secho(
+            f"error: --resolution {resolution!r}: expected WIDTHxHEIGHT, e.g. 1920x1080",
+            fg="red",
+            err=True,
+        )
+        raise typer.Exit(2)
+    size = (int(width), int(height))
     command = "proxima " + shlex.join(sys.argv[1:])
     with Progress(
         TextColumn("[bold]synth[/]"),

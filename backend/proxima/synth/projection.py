@@ -12,7 +12,7 @@ Visibility (0..1, as MediaPipe reports it) is the product of
   the face fades when the head faces away from the camera;
 - the far side: MediaPipe reports limb points beyond the body's middle (in depth) as
   less visible even where nothing hides them (a far arm held out in front of the chest
-  in a 70-degree view); such points fade by up to `FAR_SIDE` over 0.12 statures of depth
+  in a 70-degree view); such points fade by up to `FAR_SIDE` from 0.03 to 0.13 statures
   behind the torso's centre;
 - the frame: points outside the image fade with their distance from its edge, points
   behind the camera are 0.
@@ -225,7 +225,8 @@ def project_landmarks(
     in_frame = np.exp(-outside / 0.04)
     hidden = occlusion(world, camera, body)
     hidden[:, list(FACE)] = _face_turned_away(world, camera)[:, None]
-    far = FAR_SIDE * _smoothstep(_behind_torso(world, camera) / (0.12 * body.stature))
+    behind = _behind_torso(world, camera) - 0.03 * body.stature  # a heel is not "far"
+    far = FAR_SIDE * _smoothstep(behind / (0.1 * body.stature))
     far[:, list(FACE) + list(TORSO)] = 0.0
     vis = _BASE * (1 - (1 - OCCLUDED) * hidden) * (1 - far) * in_frame
     vis = np.where(depth > NEAR, vis, 0.0)
