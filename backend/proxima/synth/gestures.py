@@ -160,11 +160,11 @@ SPECS: dict[str, GestureSpec] = {
             "move_ahead",
             right=ArmMotion(
                 arm(plane=45, elevation=16, elbow=10),
-                arm(plane=72, elevation=88, rotation=32, elbow=74, pronation=-40),
+                arm(plane=65, elevation=105, rotation=20, elbow=70, pronation=-40),
             ),
             left=ArmMotion(
                 arm(plane=45, elevation=16, elbow=10),
-                arm(plane=72, elevation=88, rotation=32, elbow=74, pronation=-40),
+                arm(plane=65, elevation=105, rotation=20, elbow=70, pronation=-40),
             ),
             period_s=(1.05, 1.6),
             dwell=(1.0, 1.6),
