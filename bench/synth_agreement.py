@@ -70,7 +70,7 @@ def agreement(
         manifest = generate(Path(tmp) / "synth", n_clips, seed, view_ranges)
         gen_s = time.perf_counter() - t0
         clips = load_synth_dir(Path(tmp) / "synth")
-    entries = {e["name"]: e for e in manifest["clip_list"]}  # type: ignore[union-attr]
+    entries = {e["name"]: e for e in manifest["clip_list"]}
     view_of = {name: e["view_name"] for name, e in entries.items()}
     w = make_windows(clips, clf.window, stride, max_gap=5)
     # Windows that start once the gesture itself runs (after the move out of the idle

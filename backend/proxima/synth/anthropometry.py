@@ -27,8 +27,9 @@ of variation (an assumption), and a build factor
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -119,8 +120,8 @@ class BodyShape:
         return {k: (round(v, 4) if isinstance(v, float) else v) for k, v in asdict(self).items()}
 
     @classmethod
-    def from_dict(cls, d: dict[str, float | str]) -> BodyShape:
-        return cls(**d)  # type: ignore[arg-type]
+    def from_dict(cls, d: dict[str, Any]) -> BodyShape:
+        return cls(**d)
 
 
 def stature_sd(sex: Sex) -> float:
@@ -161,7 +162,9 @@ _WIDE = {
 }
 
 
-def _body(stature: float, build: float, sex: Sex, handedness: Hand, factor) -> BodyShape:  # type: ignore[no-untyped-def]
+def _body(
+    stature: float, build: float, sex: Sex, handedness: Hand, factor: Callable[[str], float]
+) -> BodyShape:
     v: dict[str, float] = {}
     for table in (SEGMENT_FRACTIONS, LANDMARK_FRACTIONS, SHAPE_FRACTIONS):
         for name, fraction in table.items():

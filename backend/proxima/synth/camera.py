@@ -15,6 +15,7 @@ across the image (y down; points outside the image fall outside 0..1), and for l
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 
@@ -100,7 +101,7 @@ class Camera:
         return {k: (round(v, 4) if isinstance(v, float) else v) for k, v in d.items()}
 
     @classmethod
-    def from_dict(cls, d: dict) -> Camera:  # type: ignore[type-arg]
+    def from_dict(cls, d: dict[str, Any]) -> Camera:
         d = dict(d)
         d["position"] = tuple(d["position"])
         return cls(**d)
@@ -111,7 +112,9 @@ class Camera:
         position: np.ndarray | tuple[float, float, float],
         target: np.ndarray | tuple[float, float, float],
         roll_deg: float = 0.0,
-        **intrinsics: float | int,
+        hfov_deg: float = 70.0,
+        width: int = 1920,
+        height: int = 1080,
     ) -> Camera:
         """A camera at `position` whose optical axis passes through `target` (both NED).
 
@@ -124,12 +127,13 @@ class Camera:
             raise ValueError("camera position and target coincide")
         yaw = float(np.rad2deg(np.arctan2(d[1], d[0]))) if horiz > 0 else 0.0
         pitch = float(np.rad2deg(np.arctan2(-d[2], horiz)))
-        pos = tuple(float(v) for v in np.asarray(position, np.float64))
-        return cls(pos, yaw, pitch, roll_deg, **intrinsics)  # type: ignore[arg-type]
+        p = np.asarray(position, np.float64)
+        pos = (float(p[0]), float(p[1]), float(p[2]))
+        return cls(pos, yaw, pitch, roll_deg, hfov_deg, width, height)
 
 
 def mediapipe_z(
-    depth: np.ndarray, hip_depth: np.ndarray, camera: Camera, gain: float
+    depth: np.ndarray, hip_depth: np.ndarray, camera: Camera, gain: float | np.ndarray = 1.0
 ) -> np.ndarray:
     """MediaPipe's z for landmarks at `depth` (..., 33) metres: the depth relative to the
     hips' midpoint (`hip_depth` (..., 1)), in the units of normalised x (a metre at the

@@ -84,10 +84,10 @@ def synth(
             typer.secho(f"error: {exc}", fg="red", err=True)
             raise typer.Exit(2) from None
     entries = manifest["clip_list"]
-    frames = sum(e["detected"] for e in entries)  # type: ignore[union-attr]
-    seconds = float(manifest["seconds"])  # type: ignore[arg-type]
+    frames = sum(e["detected"] for e in entries)
+    seconds = float(manifest["seconds"])
     typer.echo(
-        f"wrote {len(entries)} clips ({frames} frames, {len(manifest['scenes'])} scenes) to "  # type: ignore[arg-type]
+        f"wrote {len(entries)} clips ({frames} frames, {len(manifest['scenes'])} scenes) to "
         f"{out} in {seconds:.1f} s ({1000 * seconds / max(clips, 1):.0f} ms a clip); "
         f"train on them with --data synth:{out}"
     )

@@ -24,7 +24,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -154,7 +154,7 @@ def generate(
     overwrite: bool = False,
     on_clip: Callable[[int, str], None] | None = None,
     command: str = "",
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Write a synthetic data set to `out` and return its manifest.
 
     Files are written to a temporary folder beside `out` and moved into place at the
@@ -178,7 +178,7 @@ def generate(
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}-", dir=out.parent))
     t0 = time.perf_counter()
     scenes: list[Scene] = []
-    entries: list[dict[str, object]] = []
+    entries: list[dict[str, Any]] = []
     try:
         for k in range(clips):
             index, gesture = divmod(k, len(GESTURES))
@@ -218,7 +218,7 @@ def generate(
             )
             if on_clip:
                 on_clip(k, gesture_name)
-        manifest: dict[str, object] = {
+        manifest: dict[str, Any] = {
             "format": FORMAT,
             "command": command,
             "seed": seed,
@@ -252,7 +252,7 @@ def is_synth_dir(path: str | Path) -> bool:
         return False
 
 
-def read_manifest(path: str | Path) -> dict:  # type: ignore[type-arg]
+def read_manifest(path: str | Path) -> dict[str, Any]:
     """The manifest of a synthetic data set.
 
     Raises:
@@ -311,6 +311,6 @@ def load_synth_dir(path: str | Path) -> list[Clip]:
     return clips
 
 
-def scene_camera(manifest: dict, index: int) -> Camera:  # type: ignore[type-arg]
+def scene_camera(manifest: dict[str, Any], index: int) -> Camera:
     """The camera of scene `index` as the manifest records it."""
     return Camera.from_dict(manifest["scenes"][index]["camera"])

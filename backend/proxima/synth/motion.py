@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -67,7 +68,7 @@ class GestureDraw:
         return {k: r(v) for k, v in asdict(self).items()}
 
     @classmethod
-    def from_dict(cls, d: dict) -> GestureDraw:  # type: ignore[type-arg]
+    def from_dict(cls, d: dict[str, Any]) -> GestureDraw:
         d = dict(d)
         for k in ("right_rest", "left_rest", "right_peak", "left_peak"):
             if d.get(k) is not None:

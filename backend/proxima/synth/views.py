@@ -134,7 +134,9 @@ def orbit_camera(
     azimuth_deg: float,
     elevation_deg: float,
     distance_m: float,
-    **intrinsics: float | int,
+    hfov_deg: float = 70.0,
+    width: int = 1920,
+    height: int = 1080,
 ) -> Camera:
     """A camera `distance_m` from the operator's point at `target_height` metres above
     the ground, at a bearing `azimuth_deg` from the operator's facing (clockwise) and
@@ -145,7 +147,7 @@ def orbit_camera(
     offset = distance_m * np.array(
         [np.cos(el) * np.cos(bearing), np.cos(el) * np.sin(bearing), -np.sin(el)]
     )
-    return Camera.looking_at(target + offset, target, **intrinsics)
+    return Camera.looking_at(target + offset, target, hfov_deg=hfov_deg, width=width, height=height)
 
 
 def sample_camera(
