@@ -32,7 +32,6 @@ from proxima.gesture.clip import Clip, DataError
 from proxima.gesture.laser import load_laser_csv
 from proxima.synth.anthropometry import BodyShape, sample_body
 from proxima.synth.body import Placement, Stance, world_landmarks
-from proxima.synth.camera import Camera
 from proxima.synth.motion import IDLE_LABEL, Performance, draw_gesture, perform
 from proxima.synth.projection import ImageLandmarks, project_landmarks
 from proxima.synth.views import DEFAULT_VIEWS, CameraDraw, ViewRange, sample_camera
@@ -309,8 +308,3 @@ def load_synth_dir(path: str | Path) -> list[Clip]:
     if not clips:
         raise DataError(f"{path}: the synthetic data set holds no clips")
     return clips
-
-
-def scene_camera(manifest: dict[str, Any], index: int) -> Camera:
-    """The camera of scene `index` as the manifest records it."""
-    return Camera.from_dict(manifest["scenes"][index]["camera"])

@@ -20,7 +20,10 @@ uses the right); a left-handed operator makes them with the left arm.
 The numbers come from fitting the joint angles to the LASER clips' elbow and wrist
 positions (torso lengths from the shoulder; front view for sideways and vertical, side
 views for forward), then checking the whole motion with a classifier trained on real
-clips only (`bench/synth_agreement.py`).
+clips only (`bench/synth_agreement.py`). `have_command` is raised higher than LASER's
+operator raises it (UAV-Gesture's people hold the fist near or above the head), and
+`move_ahead` beckons higher too: both read as their gesture far more often so
+(docs/synth.md).
 """
 
 from __future__ import annotations

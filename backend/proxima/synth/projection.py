@@ -4,10 +4,11 @@ visibility and whether the person would be detected at all.
 Visibility (0..1, as MediaPipe reports it) is the product of
 - a base value per body part (MediaPipe's medians on the LASER front view: face and
   torso 0.99-1.0, arms 0.97-0.99, feet 0.96);
-- occlusion: a limb point behind the torso (a box from the hips to the shoulders, as
-  deep as the chest) or behind another limb (capsules around upper arms, forearms,
-  thighs and shanks) falls toward `OCCLUDED` (LASER side views: the far elbow 0.17-0.18,
-  the far wrist 0.27-0.39, the far knee 0.41-0.56). Face and torso points are not
+- occlusion: a limb point behind the torso (a box from just below the hips to the top
+  of the shoulders, as deep as the chest) or behind another limb (capsules around upper
+  arms, forearms, thighs and shanks; each point a ball of its own limb's radius) falls
+  toward `OCCLUDED` (LASER side views: the far elbow 0.17-0.18, the far wrist 0.27-0.39,
+  the far knee 0.41-0.56). Face and torso points are not
   occluded by the body, as MediaPipe reports them visible even in profile (0.95-1.0), but
   the face fades when the head faces away from the camera;
 - the far side: MediaPipe reports limb points beyond the body's middle (in depth) as
@@ -19,7 +20,7 @@ Visibility (0..1, as MediaPipe reports it) is the product of
 
 A frame counts as detected (MediaPipe found the person) when the shoulders' and the
 hips' midpoints are in front of the camera and inside the image, the torso spans at
-least `MIN_TORSO_PX` pixels, and at least half the landmarks are inside the image;
+least `MIN_TORSO_PX` pixels, and at least 17 of the 33 landmarks are inside the image;
 undetected frames carry no landmarks, as in the LASER recordings.
 """
 
