@@ -19,6 +19,9 @@ def _register_all() -> None:
     from proxima.gesture import cli as gesture_cli
 
     gesture_cli.register(app)
+    from proxima.synth import cli as synth_cli
+
+    synth_cli.register(app)
     from proxima.evaluation import cli as evaluation_cli
 
     evaluation_cli.register(app)

@@ -59,7 +59,7 @@ def _fingerprint(folders: Sequence[Path]) -> str:
     for folder in folders:
         h.update(str(folder.resolve()).encode())
         for f in sorted(folder.rglob("*")):
-            if f.is_file() and f.suffix in (".csv", ".mat", ".txt"):
+            if f.is_file() and f.suffix in (".csv", ".mat", ".txt", ".json"):
                 st = f.stat()
                 h.update(f"{f.relative_to(folder)}:{st.st_size}:{st.st_mtime_ns}\n".encode())
     return h.hexdigest()[:24]

@@ -127,15 +127,32 @@ def download_dataset(name: str, dest: Path | None = None, base_url: str | None =
     return dest
 
 
+SYNTH_PREFIX = "synth:"
+
+
 def resolve_dataset(spec: str | Path | None = None) -> Path:
-    """A data folder from `--data` (a path, or the names `laser` / `uav-gesture`), else
-    `PROXIMA_DATA`, else the LASER set in ../shared, else the cache, else a download.
+    """A data folder from `--data` (a path, the names `laser` / `uav-gesture`, or
+    `synth:DIR` for a synthetic data set made by `proxima synth`), else `PROXIMA_DATA`,
+    else the LASER set in ../shared, else the cache, else a download.
 
     Raises:
-        DataError: an explicit path that does not exist, or a failed download.
+        DataError: an explicit path that does not exist, a `synth:` folder that holds no
+            synthetic data set, or a failed download.
     """
     spec = spec or os.environ.get("PROXIMA_DATA") or "laser"
     name = str(spec)
+    if name.startswith(SYNTH_PREFIX):
+        from proxima.synth.dataset import MANIFEST, is_synth_dir
+
+        path = Path(name.removeprefix(SYNTH_PREFIX)).expanduser()
+        if not path.is_dir():
+            raise DataError(f"{path}: synthetic data folder does not exist "
+                            "(make it with `proxima synth --out DIR`)")  # fmt: skip
+        if not is_synth_dir(path):
+            raise DataError(
+                f"{path}: not a synthetic data set (no {MANIFEST} from `proxima synth`)"
+            )
+        return path
     if name not in DATASETS:
         path = Path(spec).expanduser()
         if not path.exists():

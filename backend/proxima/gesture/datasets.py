@@ -25,17 +25,22 @@ class LoadedData:
         h = hashlib.sha256()
         for folder in self.folders:
             for f in sorted(folder.rglob("*")):
-                if f.is_file() and f.suffix in (".csv", ".mat", ".txt"):
+                if f.is_file() and f.suffix in (".csv", ".mat", ".txt", ".json"):
                     h.update(f"{f.relative_to(folder)}:{sha256(f)}\n".encode())
         return h.hexdigest()
 
 
 def load_data(specs: Sequence[str | Path] | None = None) -> LoadedData:
-    """Resolve and load every `--data` folder (default: the LASER set).
+    """Resolve and load every `--data` folder (default: the LASER set). A synthetic data
+    set (`synth:DIR`, or any folder with the manifest of `proxima synth`) loads as
+    source `synth`, whose clips every split keeps for training only (windows.py).
 
     Raises:
-        DataError: a folder that is neither a LASER nor a UAV-Gesture folder, or bad data.
+        DataError: a folder that is neither a LASER, a UAV-Gesture nor a synthetic data
+            set, or bad data.
     """
+    from proxima.synth.dataset import is_synth_dir, load_synth_dir
+
     clips: list[Clip] = []
     folders: list[Path] = []
     uav_dir = None
@@ -45,10 +50,13 @@ def load_data(specs: Sequence[str | Path] | None = None) -> LoadedData:
         if is_uavgesture_dir(folder):
             uav_dir = folder
             clips += load_uavgesture_dir(folder)
+        elif is_synth_dir(folder):  # before LASER: its CSVs are in the LASER format
+            clips += load_synth_dir(folder)
         elif any(folder.glob("*.MP4.csv")):
             clips += load_laser_dir(folder)
         else:
             raise DataError(
-                f"{folder}: neither a LASER folder (*.MP4.csv) nor UAV-Gesture (joint_positions/)"
+                f"{folder}: neither a LASER folder (*.MP4.csv), UAV-Gesture (joint_positions/) "
+                "nor a synthetic data set (manifest.json)"
             )
     return LoadedData(clips, folders, uav_dir)

@@ -19,6 +19,9 @@ from proxima.types import GESTURES
 
 WINDOW = 60
 TEMPORAL_TRAIN_FRACTION = 0.7
+# Sources that only ever train: synthetic clips are not recordings of anyone, so no
+# split scores on them; every test part holds real clips only.
+TRAIN_ONLY_SOURCES = frozenset({"synth"})
 
 
 @dataclass
@@ -143,6 +146,8 @@ def split_clips(
     clips: Sequence[Clip], split: str, window: int = WINDOW, uav_dir: Path | None = None
 ) -> SplitParts:
     """Apply a named split: `temporal`, `cross-view:f|l|r`, `all`, `uav-gesture:1|2|3`.
+    Clips of `TRAIN_ONLY_SOURCES` (synthetic) go whole to the training part of every
+    split; the test parts hold real clips only.
 
     Raises:
         DataError: unknown split, or one that leaves no training or no test data.
@@ -152,6 +157,9 @@ def split_clips(
     test: list[Clip] = []
     if kind == "temporal":
         for c in clips:
+            if c.source in TRAIN_ONLY_SOURCES:
+                train.append(c)  # the whole clip: it never shares a scene with a test part
+                continue
             a, b = temporal_parts(c, window)
             train.append(a)
             test.append(b)
@@ -160,8 +168,8 @@ def split_clips(
     elif kind == "cross-view":
         if arg not in ("f", "l", "r"):
             raise DataError(f"split {split!r}: the view must be f, l or r")
-        # LASER clips of the held-out view test; everything else (other views, and any
-        # UAV-Gesture clips, which are other people) trains.
+        # LASER clips of the held-out view test; everything else (other views, any
+        # UAV-Gesture clips, which are other people, and synthetic clips) trains.
         for c in clips:
             (test if c.source == "laser" and c.view == arg else train).append(c)
     elif kind == "uav-gesture":
@@ -186,7 +194,12 @@ def split_clips(
     if not train:
         raise DataError(f"split {split!r} leaves no training data")
     if kind != "all" and not test:
-        raise DataError(f"split {split!r} leaves no test data for the given --data")
+        only = (
+            " (synthetic clips never test: add real data)"
+            if all(c.source in TRAIN_ONLY_SOURCES for c in clips)
+            else ""
+        )
+        raise DataError(f"split {split!r} leaves no test data for the given --data{only}")
     return SplitParts(split, train, test)
 
 
