@@ -37,7 +37,7 @@ from proxima.federated.pki import (
     check_server_files,
     throwaway_pki,
 )
-from proxima.federated.reaper import Reaper
+from proxima.federated.reaper import GRACE_S, Reaper, descendants, end_all
 from proxima.federated.settings import DeploymentSettings, split_address
 
 BIN = Path(sys.executable).parent
@@ -305,7 +305,9 @@ class LocalFederation:
         """Start again every local SuperNode whose process has ended; returns their names."""
         dead = [d for d in self.drones if self.procs[f"supernode-{d.name}"].poll() is not None]
         for d in dead:
-            self._release(self.procs[f"supernode-{d.name}"])
+            proc = self.procs[f"supernode-{d.name}"]
+            end_all(set(), descendants({proc.pid}), grace=1.0)  # its SuperExec, if left
+            self._release(proc)
             self.start_supernode(d)
         return [d.name for d in dead]
 
@@ -344,27 +346,26 @@ class LocalFederation:
             proc.wait(timeout=10)
 
     def _release(self, proc: subprocess.Popen[Any]) -> None:
-        """End what is left of `proc`'s group and forget it in the watchdog."""
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(proc.pid, signal.SIGKILL)
+        """End what is left of `proc`'s group (only while `proc` is not yet reaped, so
+        its PID cannot name another group) and forget it in the watchdog."""
+        if proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(proc.pid, signal.SIGKILL)
         with contextlib.suppress(subprocess.TimeoutExpired):
             proc.wait(timeout=5)
         self.reaper.release(proc.pid)
 
-    def stop(self, grace: float = 5.0) -> None:
-        """End every process this federation started (with its process group), the
-        `flwr` calls in flight included; idempotent."""
+    def stop(self, grace: float = GRACE_S) -> None:
+        """End every process this federation started, with its process group and every
+        descendant (the SuperLink's SuperExec and ServerApp run in a session of their
+        own), the `flwr` calls in flight included: SIGTERM, SIGKILL after `grace` s.
+        Idempotent."""
         with self._lock:
             self._stopped = True
             procs = [*reversed(self.procs.values()), *self._cli]
+        leaders = {p.pid for p in procs if p.poll() is None}  # not reaped: PIDs still ours
+        end_all(leaders, descendants({p.pid for p in procs}), grace)
         for proc in procs:
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.killpg(proc.pid, signal.SIGTERM)
-        deadline = time.monotonic() + grace
-        for proc in procs:
-            with contextlib.suppress(subprocess.TimeoutExpired):
-                proc.wait(timeout=max(0.1, deadline - time.monotonic()))
-        for proc in procs:  # the group too: SuperExec and app processes
             self._release(proc)
         self.reaper.close()
 

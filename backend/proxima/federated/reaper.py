@@ -1,24 +1,31 @@
-"""A watchdog that ends a deployment's Flower processes when the process that started
-them ends, however it ends (SIGTERM, SIGINT, SIGHUP, SIGKILL, a crash).
+"""Ending a deployment's Flower processes, all of them, however the console ends.
 
-The Flower processes run in their own process groups, so signals meant for the console
-(a terminal's Ctrl-C, a service manager's SIGTERM) do not reach them, and the console's
-own clean-up cannot run when it is killed outright. `Reaper` starts this file as a small
-stdlib-only process (`python -I reaper.py`) in a session of its own and keeps the write
-end of a pipe to its stdin; it registers each process group it starts (`+PGID`) and
-unregisters it once it has ended it itself (`-PGID`). When the pipe closes (the parent
-is gone or closed it) or the watchdog gets SIGTERM, every group still registered gets
-SIGTERM, and SIGKILL after a grace period. The watchdog ignores SIGINT and SIGHUP so a
-Ctrl-C or a closed terminal cannot take it down before the groups it guards.
+Two problems, one module:
 
-Flower's own children of those processes (the SuperLink's SuperExec and the ServerApp,
-a SuperNode's ClientApp processes) watch their parent's PID and exit when it is gone.
+- **Trees that leave their group.** The SuperLink starts its SuperExec in a session of
+  its own, and the SuperExec the ServerApp in that session; Flower ends those when their
+  parent's PID disappears, but a PID lingers as a zombie where nothing reaps orphans
+  (a container whose first process does not, a subreaper), and a ServerApp waiting on a
+  dead SuperLink then retries for ever. So the process tree is read from /proc (Linux;
+  elsewhere only process groups are ended) and every descendant is ended by PID, each
+  checked by its start time so that a reused PID is never hit.
+- **A console killed outright.** Signals meant for the console (a terminal's Ctrl-C, a
+  service manager's SIGTERM, a closed terminal's SIGHUP) do not reach Flower processes
+  in their own process groups, and a console killed by SIGTERM's default action or
+  SIGKILL runs no clean-up. `Reaper` starts this file as a small stdlib-only watchdog
+  (`python -I reaper.py`, its own session) holding the read end of a pipe: the parent
+  registers each process group it starts (`+PGID`) and unregisters those it ended itself
+  (`-PGID`). Every second the watchdog notes the descendants of what is registered; when
+  the pipe closes (the parent is gone or closed it) or it gets SIGTERM, it ends them all
+  (SIGTERM, SIGKILL after a grace period). It ignores SIGINT and SIGHUP, so a Ctrl-C or
+  a closed terminal cannot take it down before what it guards.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -27,10 +34,78 @@ import time
 from pathlib import Path
 
 GRACE_S = 3.0
+SCAN_S = 1.0
+
+
+# /proc ---------------------------------------------------------------------------------
+
+
+def _stat(pid: int) -> tuple[str, int, int, int] | None:
+    """(state, parent pid, process group, start time) of a process; None if gone."""
+    try:
+        raw = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    f = raw[raw.rindex(")") + 2 :].split()
+    return f[0], int(f[1]), int(f[2]), int(f[19])
+
+
+def descendants(roots: set[int]) -> dict[int, int]:
+    """Every living process in the trees under `roots` (PIDs) or in their process groups,
+    roots included: PID -> start time. Empty where there is no /proc."""
+    if not Path("/proc/self/stat").exists():
+        return {}
+    table: dict[int, tuple[str, int, int, int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit() and (st := _stat(int(entry))) is not None:
+            table[int(entry)] = st
+    children: dict[int, list[int]] = {}
+    for pid, (_, ppid, _, _) in table.items():
+        children.setdefault(ppid, []).append(pid)
+    todo = [p for p, st in table.items() if p in roots or st[2] in roots]
+    out: dict[int, int] = {}
+    while todo:
+        pid = todo.pop()
+        if pid in out or pid not in table:
+            continue
+        if table[pid][0] != "Z":
+            out[pid] = table[pid][3]
+        todo.extend(children.get(pid, []))
+    return out
+
+
+def _alive(pid: int, start: int) -> bool:
+    st = _stat(pid)
+    return st is not None and st[3] == start and st[0] != "Z"
+
+
+def _signal(procs: dict[int, int], groups: set[int], sig: int) -> None:
+    for pgid in groups:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(pgid, sig)
+    for pid, start in procs.items():
+        if _alive(pid, start):  # the same process, not a reused PID
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.kill(pid, sig)
+
+
+def end_all(groups: set[int], procs: dict[int, int], grace: float = GRACE_S) -> None:
+    """SIGTERM the process groups and the processes (PID -> start time, as from
+    `descendants`, which lists the groups' members too); once those processes are gone,
+    or after `grace` seconds, SIGKILL whatever is left in the groups and of the processes
+    (what started meanwhile included)."""
+    _signal(procs, groups, signal.SIGTERM)
+    deadline = time.monotonic() + grace
+    while time.monotonic() < deadline and any(_alive(p, s) for p, s in procs.items()):
+        time.sleep(0.1)
+    _signal(procs, groups, signal.SIGKILL)
+
+
+# the parent's side -----------------------------------------------------------------------
 
 
 class Reaper:
-    """The parent's side: start the watchdog, register and unregister process groups."""
+    """Start the watchdog and tell it which process groups to guard."""
 
     def __init__(self) -> None:
         self._proc: subprocess.Popen[bytes] | None = None
@@ -63,7 +138,7 @@ class Reaper:
                     self._proc = None
 
     def watch(self, pgid: int) -> None:
-        """End process group `pgid` when this process ends."""
+        """End process group `pgid` and its processes' descendants when this process ends."""
         self._groups.add(pgid)
         self._send(f"+{pgid}")
 
@@ -94,46 +169,45 @@ class Reaper:
             proc.wait(timeout=5)
 
 
-def _end(groups: set[int], grace: float) -> None:
-    """SIGTERM every group, then SIGKILL what is left of them after `grace` seconds."""
-    for pgid in groups:
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(pgid, signal.SIGTERM)
-    deadline = time.monotonic() + grace
-    alive = set(groups)
-    while alive and time.monotonic() < deadline:
-        time.sleep(0.1)
-        for pgid in list(alive):
-            try:
-                os.killpg(pgid, 0)
-            except (ProcessLookupError, PermissionError):
-                alive.discard(pgid)
-    for pgid in alive:
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(pgid, signal.SIGKILL)
+# the watchdog ----------------------------------------------------------------------------
+
+
+def _parse(line: str, groups: set[int]) -> None:
+    if len(line) < 2 or line[0] not in "+-" or not line[1:].isdigit() or int(line[1:]) < 2:
+        return  # never group 0 (our own) or 1
+    if line[0] == "+":
+        groups.add(int(line[1:]))
+    else:
+        groups.discard(int(line[1:]))
 
 
 def main() -> None:
-    """The watchdog: read `+PGID` / `-PGID` lines until EOF or SIGTERM, then end the
-    groups still registered."""
+    """Read `+PGID` / `-PGID` lines, note the registered groups' descendants every
+    second, and end them all at EOF or on SIGTERM."""
     groups: set[int] = set()
+    seen: dict[int, int] = {}  # every descendant noted while its group was registered
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
 
-    def on_term(_sig: int, _frame: object) -> None:
-        _end(groups, GRACE_S)
+    def finish(*_: object) -> None:
+        seen.update(descendants(groups))
+        end_all(groups, seen)
         os._exit(0)
 
-    signal.signal(signal.SIGTERM, on_term)
-    for raw in sys.stdin.buffer:
-        line = raw.strip().decode(errors="replace")
-        if len(line) < 2 or line[0] not in "+-" or not line[1:].isdigit() or int(line[1:]) < 2:
-            continue  # never group 0 (our own) or 1
-        if line[0] == "+":
-            groups.add(int(line[1:]))
-        else:
-            groups.discard(int(line[1:]))
-    _end(groups, GRACE_S)
+    signal.signal(signal.SIGTERM, finish)
+    buf = b""
+    while True:
+        ready, _, _ = select.select([0], [], [], SCAN_S)
+        if ready:
+            chunk = os.read(0, 4096)
+            if not chunk:
+                finish()
+            buf += chunk
+            *lines, buf = buf.split(b"\n")
+            for raw in lines:
+                _parse(raw.strip().decode(errors="replace"), groups)
+        seen.update(descendants(groups))
+        seen = {p: s for p, s in seen.items() if _alive(p, s)}
 
 
 if __name__ == "__main__":

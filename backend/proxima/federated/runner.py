@@ -267,6 +267,9 @@ class FederatedRunner:
             if state[0] in FINISHED:
                 return
             if self._stop.is_set():
+                if self._closing:  # its processes are being ended: nothing to ask them
+                    self._finish(cfg.run_id, "stopped", "the console stopped")
+                    return
                 fed.stop_run(flwr_id)
                 self._finish(cfg.run_id, "stopped", "stopped by request")
                 return
@@ -285,12 +288,12 @@ class FederatedRunner:
                     return
             time.sleep(self.poll_s)
 
-    @staticmethod
-    def _flower_status(fed: LocalFederation, flwr_id: str) -> str:
+    def _flower_status(self, fed: LocalFederation, flwr_id: str) -> str:
         try:
             return str(fed.run_status(flwr_id).get("status", ""))
         except (DeploymentError, OSError) as exc:
-            log.warning("cannot read Flower's status of run %s: %s", flwr_id, exc)
+            if not self._closing:
+                log.warning("cannot read Flower's status of run %s: %s", flwr_id, exc)
             return ""
 
     # events ----------------------------------------------------------------------------------
