@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cryptography import x509
+from cryptography.exceptions import UnsupportedAlgorithm
 from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
@@ -206,7 +207,7 @@ def check_public_key(path: Path) -> None:
         key = serialization.load_ssh_public_key(Path(path).read_bytes())
     except OSError as exc:
         raise PKIError(f"{path}: cannot read the public key ({exc.strerror})") from None
-    except ValueError as exc:
+    except (ValueError, UnsupportedAlgorithm) as exc:
         raise PKIError(f"{path}: not an OpenSSH public key ({exc})") from None
     if not isinstance(key, ec.EllipticCurvePublicKey):
         raise PKIError(f"{path}: expected an EC key (ecdsa-sha2-nistp384), got {type(key)}")
