@@ -362,7 +362,7 @@ class LocalFederation:
         Idempotent."""
         with self._lock:
             self._stopped = True
-            procs = [*reversed(self.procs.values()), *self._cli]
+            procs: list[subprocess.Popen[Any]] = [*reversed(self.procs.values()), *self._cli]
         leaders = {p.pid for p in procs if p.poll() is None}  # not reaped: PIDs still ours
         end_all(leaders, descendants({p.pid for p in procs}), grace)
         for proc in procs:

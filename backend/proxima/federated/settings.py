@@ -49,20 +49,24 @@ class DeploymentSettings(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    tls: bool = Field(True, description="TLS between SuperLink and SuperNodes")
-    supernode_auth: bool = Field(True, description="only registered SuperNode keys may join")
-    ca_certfile: Path | None = Field(None, description="CA certificate (PEM) drones trust")
-    server_certfile: Path | None = Field(None, description="SuperLink certificate (PEM)")
-    server_keyfile: Path | None = Field(None, description="SuperLink private key (PEM)")
+    tls: bool = Field(default=True, description="TLS between SuperLink and SuperNodes")
+    supernode_auth: bool = Field(
+        default=True, description="only registered SuperNode keys may join"
+    )
+    ca_certfile: Path | None = Field(default=None, description="CA certificate (PEM) drones trust")
+    server_certfile: Path | None = Field(default=None, description="SuperLink certificate (PEM)")
+    server_keyfile: Path | None = Field(default=None, description="SuperLink private key (PEM)")
     authorized_keys: list[Path] = Field(
         default_factory=list,
         description="drones' SuperNode public keys (OpenSSH), registered at every start",
     )
     fleet_address: str = Field(
-        "", description="HOST:PORT drones dial (the Fleet-only gateway); empty: this machine"
+        default="",
+        description="HOST:PORT drones dial (the Fleet-only gateway); empty: this machine",
     )
     local_supernodes: bool = Field(
-        True, description="start one SuperNode per drone here (false: the drones run theirs)"
+        default=True,
+        description="start one SuperNode per drone here (false: the drones run theirs)",
     )
 
     @model_validator(mode="after")
