@@ -1,6 +1,6 @@
 """The Fleet-only gateway: what the drones reach on the ground station's network.
 
-In flwr 1.41 the SuperLink serves three APIs on one HTTPS port: the Fleet API (what
+In flwr 1.41 and 1.42 the SuperLink serves three APIs on one HTTPS port: the Fleet API (what
 SuperNodes call), the Control API (`flwr run`, `flwr supernode register`: submit code to
 run, admit a SuperNode key) and the Runtime API (the ServerApp's). The open-source
 SuperLink authenticates no Control API caller, so whoever reaches that port could

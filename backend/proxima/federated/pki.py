@@ -1,7 +1,7 @@
 """Certificates and keys for a secured federation: a CA, the SuperLink's TLS certificate
 signed by it, and one EC key pair per drone for Flower's SuperNode authentication.
 
-Flower (1.41) wants: on the SuperLink a PEM CA certificate, server certificate and key
+Flower (1.41, 1.42) wants: on the SuperLink a PEM CA certificate, server certificate and key
 (`--ssl-ca-certfile/--ssl-certfile/--ssl-keyfile`); on each SuperNode the CA certificate
 (`--root-certificates`) and an OpenSSH EC private key on a NIST curve
 (`--auth-supernode-private-key`); its OpenSSH public key is registered on the SuperLink
@@ -210,7 +210,8 @@ def check_public_key(path: Path) -> None:
     except (ValueError, UnsupportedAlgorithm) as exc:
         raise PKIError(f"{path}: not an OpenSSH public key ({exc})") from None
     if not isinstance(key, ec.EllipticCurvePublicKey):
-        raise PKIError(f"{path}: expected an EC key (ecdsa-sha2-nistp384), got {type(key)}")
+        kind = type(key).__name__
+        raise PKIError(f"{path}: expected an EC key (ecdsa-sha2-nistp384), got {kind}")
 
 
 def check_server_files(creds: ServerCredentials) -> None:

@@ -8,7 +8,7 @@ pair per local SuperNode in the runs folder (milliseconds; nothing else trusts t
 A real fleet sets the certificate paths, the drones' public keys, a `fleet_address` the
 drones dial and `local_supernodes = false` (docs/federated.md: "A real fleet").
 
-The SuperLink itself always binds 127.0.0.1: in flwr 1.41 its one port also serves the
+The SuperLink itself always binds 127.0.0.1: in flwr 1.41 and 1.42 its one port also serves the
 Control API (submit runs, register SuperNodes) with no account authentication in the
 open-source edition, so the drones reach it through the Fleet-only gateway
 (`proxima.federated.gateway`) on `fleet_address`.
