@@ -7,7 +7,8 @@ fields with a double underscore: `PROXIMA_SERVER__PORT=8100`, lists as JSON:
 
 Each section is the subsystem's own model, not a copy: `[[streams]]` are
 `proxima.engine.StreamSpec`, `[engine]` is `proxima.engine.EngineSettings`, `[recognition]`
-is `proxima.control.ControlSettings`, `[safety]` is `proxima.drone.safety.SafetyConfig`.
+is `proxima.control.ControlSettings`, `[safety]` is `proxima.drone.safety.SafetyConfig`,
+`[training]` is `proxima.federated.settings.TrainingSettings`.
 Keys that were renamed still work for now: `DEPRECATED_KEYS` moves them to their new place
 with a `DeprecationWarning` and a log line naming both.
 
@@ -24,7 +25,7 @@ import tomllib
 import warnings
 from contextvars import ContextVar
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, SecretStr, ValidationError, model_validator
 from pydantic_settings import (
@@ -36,6 +37,7 @@ from pydantic_settings import (
 from proxima.control.config import ControlSettings
 from proxima.drone.safety import SafetyConfig
 from proxima.engine.config import EngineSettings, StreamSpec
+from proxima.federated.settings import TrainingSettings
 
 log = logging.getLogger(__name__)
 
@@ -115,14 +117,6 @@ class ViewSettings(_Section):
     operator_height_m: float = Field(1.75, gt=0)
     trail_points: int = Field(300, ge=2)
     update_hz: float = Field(10.0, gt=0)
-
-
-class TrainingSettings(_Section):
-    """Federated runs started from the console: on Flower's Deployment Runtime (a local
-    SuperLink and one SuperNode per drone, the default) or its Simulation Runtime."""
-
-    enabled: bool = True
-    flower_runtime: Literal["deployment", "simulation"] = "deployment"
 
 
 # Documented keys that were renamed, old path -> new path (section, [table,] key). Each
