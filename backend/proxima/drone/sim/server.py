@@ -24,6 +24,7 @@ import sys
 import threading
 import time
 import traceback
+from collections import Counter
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -92,6 +93,7 @@ class VehicleServer:
         self.packets_dropped = 0
         self.bad_datagrams = 0  # did not parse as MAVLink
         self.handler_errors = 0  # a handler raised: a bug, logged to stderr
+        self.handled: Counter[str] = Counter()  # messages given to a handler, by type
         self.messages: dict[str, MessageHandler] = {
             "HEARTBEAT": self._heartbeat,
             "COMMAND_LONG": self._command_long,
@@ -141,16 +143,17 @@ class VehicleServer:
                 self._handle(msg)
 
     def _parse(self, data: bytes) -> list[Any]:
-        """The messages of one datagram; none (and a fresh parser) when it is broken."""
+        """The messages of one datagram. A datagram is whole or nothing: bytes left over
+        (a truncated packet) would otherwise swallow the start of the next datagram, so
+        the parser starts afresh after a broken one."""
         try:
             msgs = self.parser.parse_buffer(data) or []
         except Exception:  # pymavlink raises more than MAVError on hostile bytes
+            msgs = None
+        good = [m for m in msgs or () if m.get_type() != "BAD_DATA"]
+        if msgs is None or len(good) < len(msgs) or self.parser.buf_len():
             self.bad_datagrams += 1
             self.parser = self._new_parser()
-            return []
-        good = [m for m in msgs if m.get_type() != "BAD_DATA"]
-        if len(good) < len(msgs):
-            self.bad_datagrams += 1
         return good
 
     def run(self, stop: threading.Event) -> None:
@@ -185,6 +188,7 @@ class VehicleServer:
             return  # for a camera, a gimbal, ... of this system: not ours
         handler = self.messages.get(msg.get_type())
         if handler is not None:
+            self.handled[msg.get_type()] += 1
             self._guarded(handler, msg)
 
     def _guarded(self, fn: Callable[[Any], None], arg: Any) -> None:
