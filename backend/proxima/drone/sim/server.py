@@ -218,6 +218,7 @@ class VehicleServer:
         else:
             result = vehicle_command(self.vehicle, command)
         self._ack(command.id, mav.MAV_RESULT_UNSUPPORTED if result is None else result, msg)
+        self.telemetry.send_requested()
 
     def _set_mode(self, msg: Any) -> None:
         result = set_mode_message(self.vehicle, msg.base_mode, msg.custom_mode)

@@ -168,6 +168,7 @@ class TelemetryStreams:
         self.t0 = time.monotonic()
         self.intervals = {msg_id: self._default(msg_id) for msg_id in ENCODERS}
         self.next_send: dict[int, float] = dict.fromkeys(self.intervals, self.t0)
+        self.requested: list[int] = []  # sent after the COMMAND_ACK (`send_requested`)
         self.messages: dict[str, Callable[[Any], None]] = {}  # commands only, below
         self.commands: dict[int, Callable[[Command], int]] = {
             mav.MAV_CMD_SET_MESSAGE_INTERVAL: self._set_interval,
@@ -205,6 +206,13 @@ class TelemetryStreams:
     def tick(self, now: float) -> None:
         self.stream(now)
 
+    def send_requested(self) -> None:
+        """Send the messages a command asked for. The server calls this after the
+        command's COMMAND_ACK: the answer to REQUEST_MESSAGE follows its ACK."""
+        requested, self.requested = self.requested, []
+        for msg_id in requested:
+            self.send_one(msg_id)
+
     # --- commands (each param untrusted: a bad one is DENIED) ---------------------------
     def _set_interval(self, c: Command) -> int:
         msg_id = integer(c.params[0], 0, MAX_MESSAGE_ID)
@@ -230,12 +238,13 @@ class TelemetryStreams:
 
     def _request_message(self, c: Command) -> int:
         msg_id = integer(c.params[0], 0, MAX_MESSAGE_ID)
-        if msg_id is not None and self.send_one(msg_id):
-            return mav.MAV_RESULT_ACCEPTED
-        return mav.MAV_RESULT_DENIED
+        if msg_id is None or msg_id not in ENCODERS:
+            return mav.MAV_RESULT_DENIED
+        self.requested.append(msg_id)
+        return mav.MAV_RESULT_ACCEPTED
 
     def _get_home(self, c: Command) -> int:
-        self.send_one(mav.MAVLINK_MSG_ID_HOME_POSITION)
+        self.requested.append(mav.MAVLINK_MSG_ID_HOME_POSITION)
         return mav.MAV_RESULT_ACCEPTED
 
     def _capabilities(self, c: Command) -> int:
@@ -243,5 +252,5 @@ class TelemetryStreams:
         if wanted is None:
             return mav.MAV_RESULT_DENIED
         if wanted:
-            self.send_one(mav.MAVLINK_MSG_ID_AUTOPILOT_VERSION)
+            self.requested.append(mav.MAVLINK_MSG_ID_AUTOPILOT_VERSION)
         return mav.MAV_RESULT_ACCEPTED
