@@ -82,6 +82,11 @@ class MavlinkLink(MavlinkActions):
         return self._io.sent_counts
 
     @property
+    def running(self) -> bool:
+        """Whether the link's owner thread is running (from `connect()` to `close()`)."""
+        return self._io.running
+
+    @property
     def faults(self) -> Counter[str]:
         """What arrived unusable: BAD_DATA, decode_error (logged), reopened."""
         return self._io.faults

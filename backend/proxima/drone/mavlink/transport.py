@@ -87,6 +87,10 @@ class MavlinkTransport:
     def closed(self) -> bool:
         return self._stop.is_set()
 
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
     def start(self) -> None:
         """Start the owner thread (once)."""
         if self._thread is None:
