@@ -69,7 +69,8 @@ class ParamSet(ABC):
         return ParamStore(self.specs(cfg), self.bytewise)
 
     @abstractmethod
-    def limits(self, p: ParamStore) -> Limits: ...
+    def limits(self, p: ParamStore, cfg: SimConfig) -> Limits:
+        """The flight limits the parameters set (`cfg` for what has no parameter)."""
 
     @abstractmethod
     def fence(self, p: ParamStore) -> Fence | None: ...
@@ -148,7 +149,7 @@ class ArduCopterParams(ParamSet):
             ParamSpec("DISARM_DELAY", INT8, cfg.disarm_delay_s, 0, 127, "s armed on ground"),
         ]
 
-    def limits(self, p: ParamStore) -> Limits:
+    def limits(self, p: ParamStore, cfg: SimConfig) -> Limits:
         cm = 0.01
         return Limits(
             cruise=p["WPNAV_SPEED"] * cm,
@@ -160,7 +161,7 @@ class ArduCopterParams(ParamSet):
             takeoff_alt=p["PILOT_TKOFF_ALT"] * cm,
             rtl_alt=p["RTL_ALT"] * cm,
             disarm_delay=p["DISARM_DELAY"],
-            land_disarm=0.5,
+            land_disarm=cfg.land_disarm_s,  # ArduCopter has no parameter for it
         )
 
     def fence(self, p: ParamStore) -> Fence | None:
@@ -227,7 +228,7 @@ class PX4Params(ParamSet):
             ParamSpec("COM_DISARM_PRFLT", REAL32, cfg.disarm_delay_s, -1, 20, "s armed on ground"),
         ]
 
-    def limits(self, p: ParamStore) -> Limits:
+    def limits(self, p: ParamStore, cfg: SimConfig) -> Limits:
         return Limits(
             cruise=p["MPC_XY_CRUISE"],
             climb=p["MPC_Z_VEL_MAX_UP"],

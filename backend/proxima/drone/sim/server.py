@@ -53,7 +53,8 @@ MessageHandler = Callable[[Any], None]
 class Service(Protocol):
     """A part of the vehicle's MAVLink side: the messages it handles and its timed work."""
 
-    messages: Mapping[str, MessageHandler]
+    @property
+    def messages(self) -> Mapping[str, MessageHandler]: ...
 
     def tick(self, now: float) -> None: ...
 

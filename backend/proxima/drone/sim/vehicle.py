@@ -84,7 +84,7 @@ class Vehicle:
     def limits(self) -> Limits:
         """The flight limits its parameters set now."""
         if self._limits is None or self._limits[0] != self.params.version:
-            self._limits = (self.params.version, self.fw.params.limits(self.params))
+            self._limits = (self.params.version, self.fw.params.limits(self.params, self.cfg))
         return self._limits[1]
 
     @property
