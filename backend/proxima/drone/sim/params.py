@@ -126,12 +126,6 @@ class ParamStore:
         return float(value) if spec.integer else None
 
 
-@dataclass
-class _Request:
-    index: int
-    target: tuple[int, int]
-
-
 class ParamService:
     """The parameter protocol of one vehicle, on the server's encoder `m`.
     `say(text, severity)` reports a refused PARAM_SET as the vehicle's STATUSTEXT."""
@@ -140,7 +134,7 @@ class ParamService:
         self.store = store
         self.m = m
         self.say = say
-        self._queue: deque[_Request] = deque()
+        self._queue: deque[int] = deque()  # indices of a list request still to send
         self.messages: dict[str, Callable[[Any], None]] = {
             "PARAM_REQUEST_LIST": self._request_list,
             "PARAM_REQUEST_READ": self._request_read,
@@ -150,12 +144,11 @@ class ParamService:
     def tick(self, now: float) -> None:
         """Send the next PARAM_VALUEs of a list request."""
         for _ in range(min(SEND_PER_TICK, len(self._queue))):
-            self._send_value(self._queue.popleft().index)
+            self._send_value(self._queue.popleft())
 
     def _request_list(self, msg: Any) -> None:
-        self._queue.clear()  # a new list request restarts the list
-        target = (msg.get_srcSystem(), msg.get_srcComponent())
-        self._queue.extend(_Request(i, target) for i in range(len(self.store)))
+        self._queue.clear()  # a new list request restarts the list (PARAM_VALUE is broadcast)
+        self._queue.extend(range(len(self.store)))
 
     def _request_read(self, msg: Any) -> None:
         index = msg.param_index
