@@ -150,8 +150,9 @@ async def flow(port: int, px4: bool, step: Steps) -> None:
 
 @pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
 def test_mavsdk_standard_flow(start_sim: StartSim, autopilot: str) -> None:
-    sim = start_sim("--autopilot", autopilot, sysid=1)
-    step = Steps(f"--autopilot {autopilot}")
+    flags = ("--autopilot", "px4") if autopilot == "px4" else ()  # ArduPilot: the default
+    sim = start_sim(*flags, sysid=1)
+    step = Steps(" ".join(flags) or "default: ArduPilot")
     asyncio.run(flow(sim.port, autopilot == "px4", step))
     print(step.report())
     assert sim.proc.poll() is None
