@@ -48,7 +48,8 @@ def recognize(
     console = Console(stderr=True, soft_wrap=True)
     overrides = {"threshold": threshold, "debounce_s": debounce_s, "idle_disarm_s": idle_disarm_s}
     try:
-        control = ControlSettings(**{k: v for k, v in overrides.items() if v is not None})
+        given = {k: v for k, v in overrides.items() if v is not None}
+        control = ControlSettings.model_validate(given)
         settings = EngineSettings(
             checkpoint=checkpoint,
             pose_every=pose_every,

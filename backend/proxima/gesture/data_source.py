@@ -15,6 +15,7 @@ import tempfile
 import urllib.request
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import quote
 
 from proxima.gesture.clip import DataError
 
@@ -106,7 +107,7 @@ def download_dataset(name: str, dest: Path | None = None, base_url: str | None =
             for rel, digest in table.items():
                 target = tmp / rel
                 target.parent.mkdir(parents=True, exist_ok=True)
-                url = base_url + urllib.request.quote(rel)
+                url = base_url + quote(rel)
                 try:
                     with urllib.request.urlopen(url, timeout=30) as r, target.open("wb") as f:
                         shutil.copyfileobj(r, f)
