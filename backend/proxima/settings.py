@@ -97,7 +97,7 @@ class ServerSettings(_Section):
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
     db_path: Path = Path("runs/proxima.db")
-    static_dir: Path | None = None  # default: <repo>/static
+    static_dir: Path | None = None  # default: the shipped console (proxima.shipped)
     models_dir: Path = Path("models")
     session_ttl_s: float = Field(12 * 3600, gt=0)
     viser_enabled: bool = True
@@ -332,7 +332,10 @@ class Settings(BaseSettings):
         raise KeyError(name)
 
     def static_dir(self) -> Path:
-        """Where the built frontend lies (static/ at the repository root by default)."""
+        """Where the built frontend lies: `[server] static_dir`, else the one shipped
+        with Proxima (static/ in a checkout, inside the package in a wheel)."""
         if self.server.static_dir is not None:
             return self.server.static_dir
-        return Path(__file__).resolve().parents[2] / "static"
+        from proxima.shipped import STATIC_DIR, shipped_path
+
+        return shipped_path(STATIC_DIR)

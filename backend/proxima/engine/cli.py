@@ -19,7 +19,7 @@ def recognize(
     ],
     events: Annotated[Path, typer.Option(help="write every event here, one JSON per line")],
     checkpoint: Annotated[
-        Path | None, typer.Option(help="gesture model (default: models/gesture-default.pt)")
+        Path | None, typer.Option(help="gesture model (default: the shipped gesture-default.pt)")
     ] = None,
     name: Annotated[str, typer.Option(help="stream name in the events")] = "main",
     drone: Annotated[str, typer.Option(help="drone the commands go to (default: NAME)")] = "",

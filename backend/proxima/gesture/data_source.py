@@ -1,5 +1,6 @@
 """Where training data comes from: an explicit path, `PROXIMA_DATA`, the `../shared`
-copy beside the repository, or a verified download into the user cache.
+copy beside the repository (in a checkout) or beside the working directory, the user
+cache, or a verified download into the user cache (never with `PROXIMA_OFFLINE` set).
 
 Downloads use the data sets' pinned upstream commits and the SHA-256 list shipped with
 the package; files land in a temporary folder and are moved into place only when every
@@ -18,8 +19,8 @@ from pathlib import Path
 from urllib.parse import quote
 
 from proxima.gesture.clip import DataError
+from proxima.shipped import checkout_root, offline
 
-REPO_ROOT = Path(__file__).resolve().parents[3]
 _CHECKSUMS = Path(__file__).with_name("checksums")
 
 
@@ -55,11 +56,13 @@ def cache_dir() -> Path:
 
 
 def shared_dataset_dir(name: str) -> Path | None:
-    """The `../shared/datasets/<folder>` copy beside the repository (or the working
-    directory), if present."""
+    """The `../shared/datasets/<folder>` copy beside the repository (in a checkout) or
+    beside the working directory, if present."""
     info = DATASETS[name]
-    for root in (REPO_ROOT.parent, Path.cwd().parent):
-        candidate = root / "shared" / "datasets" / info.shared_dir
+    for root in (checkout_root(), Path.cwd()):
+        if root is None:
+            continue
+        candidate = root.parent / "shared" / "datasets" / info.shared_dir
         if candidate.is_dir():
             return candidate
     return None
@@ -133,7 +136,8 @@ def resolve_dataset(spec: str | Path | None = None) -> Path:
     `PROXIMA_DATA`, else the LASER set in ../shared, else the cache, else a download.
 
     Raises:
-        DataError: an explicit path that does not exist, or a failed download.
+        DataError: an explicit path that does not exist, a failed download, or no copy
+            found while `PROXIMA_OFFLINE` forbids the download.
     """
     spec = spec or os.environ.get("PROXIMA_DATA") or "laser"
     name = str(spec)
@@ -148,6 +152,12 @@ def resolve_dataset(spec: str | Path | None = None) -> Path:
     cached = cache_dir() / DATASETS[name].shared_dir
     if cached.is_dir():
         return cached
+    if offline():
+        raise DataError(
+            f"no {name} data set: none in ../shared/datasets beside the repository or the "
+            f"working directory, none at {cached}, and PROXIMA_OFFLINE forbids downloading "
+            "it; name a folder with --data or PROXIMA_DATA"
+        )
     return download_dataset(name)
 
 
