@@ -36,6 +36,7 @@ from pydantic_settings import (
 from proxima.control.config import ControlSettings
 from proxima.drone.safety import SafetyConfig
 from proxima.engine.config import EngineSettings, StreamSpec
+from proxima.shipped import STATIC_DIR, shipped_path
 
 log = logging.getLogger(__name__)
 
@@ -336,6 +337,4 @@ class Settings(BaseSettings):
         with Proxima (static/ in a checkout, inside the package in a wheel)."""
         if self.server.static_dir is not None:
             return self.server.static_dir
-        from proxima.shipped import STATIC_DIR, shipped_path
-
         return shipped_path(STATIC_DIR)

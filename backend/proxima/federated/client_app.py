@@ -94,6 +94,7 @@ def _arrays(msg: Message) -> dict[str, np.ndarray]:
 
 
 def _int(value: object) -> int:
+    """A run-config number (Flower types record values as any of its value kinds)."""
     if not isinstance(value, int | float | str):
         raise TypeError(f"expected a number, got {type(value).__name__}")
     return int(value)
