@@ -173,6 +173,7 @@ def test_the_wheel_carries_the_shipped_files(installed: Installed) -> None:
         "from proxima.gesture.classifier import default_checkpoint\n"
         "from proxima.settings import Settings\n"
         "print(s.checkout_root())\n"
+        "assert len(Settings.load(DEFAULT_CONFIG).drones) == 3  # the demo's settings load\n"
         "for p in (proxima.__file__, default_checkpoint(), DEFAULT_CONFIG,\n"
         "          Settings().static_dir() / 'index.html'):\n"
         "    print(p)\n"
