@@ -38,6 +38,7 @@ from proxima.control.config import ControlSettings
 from proxima.drone.safety import SafetyConfig
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.federated.settings import TrainingSettings
+from proxima.shipped import STATIC_DIR, shipped_path
 
 log = logging.getLogger(__name__)
 
@@ -99,7 +100,7 @@ class ServerSettings(_Section):
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
     db_path: Path = Path("runs/proxima.db")
-    static_dir: Path | None = None  # default: <repo>/static
+    static_dir: Path | None = None  # default: the shipped console (proxima.shipped)
     models_dir: Path = Path("models")
     session_ttl_s: float = Field(12 * 3600, gt=0)
     viser_enabled: bool = True
@@ -326,7 +327,8 @@ class Settings(BaseSettings):
         raise KeyError(name)
 
     def static_dir(self) -> Path:
-        """Where the built frontend lies (static/ at the repository root by default)."""
+        """Where the built frontend lies: `[server] static_dir`, else the one shipped
+        with Proxima (static/ in a checkout, inside the package in a wheel)."""
         if self.server.static_dir is not None:
             return self.server.static_dir
-        return Path(__file__).resolve().parents[2] / "static"
+        return shipped_path(STATIC_DIR)
