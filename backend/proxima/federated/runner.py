@@ -182,8 +182,12 @@ class FederatedRunner:
         self._stop.set()
 
     def close(self) -> None:
-        """Stop the current run and every Flower process this runner started."""
+        """Stop the current run and every Flower process this runner started. The
+        processes go first, so a run waiting on Flower (submitting, polling) ends at once
+        instead of after its timeouts; then anything its thread still started."""
         self._stop.set()
+        if self.federation is not None:
+            self.federation.stop()
         if self._thread is not None:
             self._thread.join(timeout=30)
         if self.federation is not None:
@@ -202,8 +206,8 @@ class FederatedRunner:
         )
         fed_dir = self.workdir / "deployment"
         shutil.rmtree(fed_dir, ignore_errors=True)
-        self.federation = LocalFederation(fed_dir, drones).start()
-        return self.federation
+        fed = self.federation = LocalFederation(fed_dir, drones)  # visible to close() at once
+        return fed.start()
 
     # running -----------------------------------------------------------------------------
 
@@ -230,6 +234,9 @@ class FederatedRunner:
 
     def _deployment_run(self, cfg: FLConfig) -> None:
         fed = self.ensure_federation()
+        if self._stop.is_set():
+            self._finish(cfg.run_id, "stopped", "stopped by request before it was submitted")
+            return
         flwr_id = fed.submit(cfg)
         self.store.update_run(cfg.run_id, flwr_run_id=flwr_id, started_at=time.time())
         seen, last_state = -1, ("pending", "")
@@ -246,7 +253,8 @@ class FederatedRunner:
             if state[0] in FINISHED:
                 return
             if self._stop.is_set():
-                fed.stop_run(flwr_id)
+                if fed.alive().get("superlink"):  # closing stops the SuperLink itself
+                    fed.stop_run(flwr_id)
                 self._finish(cfg.run_id, "stopped", "stopped by request")
                 return
             if time.monotonic() >= next_flower_check:

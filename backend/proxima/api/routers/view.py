@@ -79,14 +79,17 @@ async def view_page(path: str, request: Request) -> Response:
             status.HTTP_503_SERVICE_UNAVAILABLE, "the 3D view does not run in this server"
         )
     host, port = upstream
+    # The body is passed on as viser encoded it (gzip when the browser accepts it).
+    encoding = request.headers.get("accept-encoding", "identity")
     async with httpx.AsyncClient(trust_env=False, timeout=10.0) as client:
         try:
-            answer = await client.request(
+            async with client.stream(
                 request.method,
                 f"http://{host}:{port}/{path}",
                 params=request.query_params,
-                headers={"accept-encoding": request.headers.get("accept-encoding", "identity")},
-            )
+                headers={"accept-encoding": encoding},
+            ) as answer:
+                body = b"".join([chunk async for chunk in answer.aiter_raw()])
         except httpx.HTTPError as exc:
             raise HTTPException(
                 status.HTTP_503_SERVICE_UNAVAILABLE, f"the 3D view does not answer: {exc}"
@@ -94,7 +97,7 @@ async def view_page(path: str, request: Request) -> Response:
     headers = {k: v for k, v in answer.headers.items() if k.lower() in PASSED_HEADERS}
     headers["cache-control"] = "no-store"  # behind a login: never in a shared cache
     headers["content-security-policy"] = "frame-ancestors 'self'"  # only the console frames it
-    return Response(answer.content, status_code=answer.status_code, headers=headers)
+    return Response(body, status_code=answer.status_code, headers=headers)
 
 
 async def _pump_to_viser(websocket: WebSocket, upstream: ClientConnection) -> None:
