@@ -47,16 +47,23 @@ class ConsoleRuntime:
     notes: list[str] = field(default_factory=list)
 
     def close(self) -> None:
+        """Stop every part, Flower's processes first; a part that fails to stop is logged
+        and the others are stopped all the same."""
+        steps: list[tuple[str, Any]] = []
         if self.training is not None:
-            self.training.close()
+            steps.append(("federated runner", self.training.close))
         if self.engine is not None:
-            self.engine.stop()
+            steps.append(("live engine", self.engine.stop))
         if self.drones is not None:
-            self.drones.close()
-        for link in self.links.values():
-            link.close()
+            steps.append(("drone controller", self.drones.close))
+        steps += [(f"drone link {name}", link.close) for name, link in self.links.items()]
         if self.view is not None:
-            self.view.stop()
+            steps.append(("3D view", self.view.stop))
+        for what, stop in steps:
+            try:
+                stop()
+            except Exception:
+                log.exception("could not stop the %s", what)
 
     def restart_engine(self) -> Engine:
         """Stop the live engine and start a fresh one on the same streams (new stream
