@@ -8,7 +8,7 @@ except under `/api` and `/viser` (the 3D view's proxy), which it never shadows.
 
 from __future__ import annotations
 
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator, Callable, MutableMapping
 from contextlib import asynccontextmanager
 from typing import Any
 
@@ -77,7 +77,7 @@ class FrontendMount(Mount):
     """The built frontend at `/`, matching no path under `/api` or `/viser`: those answer
     their own 404 and 405 (as `ErrorOut`, with `Allow`) instead of the file server's."""
 
-    def matches(self, scope: Scope) -> tuple[Match, dict[str, Any]]:
+    def matches(self, scope: Scope) -> tuple[Match, MutableMapping[str, Any]]:
         path = scope.get("path", "")
         if path in ("/api", VIEW_PATH) or path.startswith(("/api/", f"{VIEW_PATH}/")):
             return Match.NONE, {}
