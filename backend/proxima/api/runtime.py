@@ -53,6 +53,11 @@ class ConsoleRuntime:
             self.engine.stop()
         if self.drones is not None:
             self.drones.close()
+        if self.links:
+            from proxima.sim.registry import unregister_vehicle
+
+            for name in self.links:
+                unregister_vehicle(name)
         for link in self.links.values():
             link.close()
         if self.view is not None:
@@ -139,7 +144,9 @@ def federated_drones(settings: Settings) -> list[Any] | None:
 
 def _start_drones(settings: Settings, bus: EventBus, db: DbEngine, rt: ConsoleRuntime) -> Any:
     from proxima.drone.controller import DroneController, EmergencyStopService
+    from proxima.drone.heading import HeadingPolicy
     from proxima.drone.mavlink import MavlinkLink
+    from proxima.sim.registry import register_links
     from proxima.store.command_log import CommandLog
 
     for d in settings.drones:
@@ -149,9 +156,13 @@ def _start_drones(settings: Settings, bus: EventBus, db: DbEngine, rt: ConsoleRu
             link.connect(timeout=10.0)
         except Exception as exc:  # the link keeps trying; its state shows "connecting"
             rt.notes.append(f"drone {d.name}: {exc}")
-    controller = DroneController(rt.links, safety=settings.safety, log=CommandLog(db), bus=bus)
+    heading = HeadingPolicy.from_drones(settings.drones, settings.view.operator_position)
+    controller = DroneController(
+        rt.links, safety=settings.safety, log=CommandLog(db), bus=bus, heading=heading
+    )
     controller.attach(bus)
     rt.drones = controller
+    register_links(rt.links, settings.drones)  # `sim:SCENE#NAME` sees through their cameras
     return EmergencyStopService(controller)
 
 
