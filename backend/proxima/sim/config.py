@@ -14,6 +14,7 @@ from it.
     [capture]                    # the live pose path's noise (x the measured; 0 = none)
     jitter = 1.0
     visibility_noise = 1.0
+    depth_jitter = 1.0           # z's jitter against x and y's (x the measured ratio, 23)
 
     [[bystanders]]               # people who do not command the drones
     behaviour = "walk"           # stand | arms | walk | gestures
@@ -71,6 +72,7 @@ class OperatorConfig(_Model):
 class CaptureConfig(_Model):
     jitter: float = Field(1.0, ge=0.0, le=8.0)
     visibility_noise: float = Field(1.0, ge=0.0, le=4.0)
+    depth_jitter: float = Field(1.0, ge=0.0, le=8.0)
 
 
 class BystanderConfig(_Model):
@@ -164,5 +166,7 @@ def build_scene(cfg: SceneConfig, name: str) -> Scene:
                 steps=parse_script(b.script) if b.script else (),
             )
         )
-    noise = CaptureNoise(cfg.capture.jitter, cfg.capture.visibility_noise)
+    noise = CaptureNoise(
+        cfg.capture.jitter, cfg.capture.visibility_noise, cfg.capture.depth_jitter
+    )
     return Scene(name, people, cfg.fps, cfg.loop, noise, cfg.seed)

@@ -24,18 +24,25 @@ from proxima.gesture.geometry import Z_SCALE
 @dataclass(frozen=True)
 class CaptureNoise:
     """`jitter` and `visibility_noise` as multiples of the measured live-path values
-    (the capture model's parameters of the same names and ranges; 0 turns one off).
+    (the capture model's parameters of the same names and ranges; 0 turns one off);
+    `depth_jitter` scales the measured ratio of z's jitter to x and y's (`Z_OVER_XY`, 23
+    in the metric frame), so depth noise can be studied apart (docs/sim.md: it decides
+    whether a side camera reads the gestures at all).
 
     Raises:
-        ValueError: (constructor) a value outside 0..8 (jitter) or 0..4 (visibility).
+        ValueError: (constructor) a value outside 0..8 (jitter, depth_jitter) or 0..4
+            (visibility).
     """
 
     jitter: float = 1.0
     visibility_noise: float = 1.0
+    depth_jitter: float = 1.0
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.jitter <= 8.0:
             raise ValueError(f"jitter must lie in 0..8 (x the measured), got {self.jitter}")
+        if not 0.0 <= self.depth_jitter <= 8.0:
+            raise ValueError(f"depth_jitter must lie in 0..8, got {self.depth_jitter}")
         if not 0.0 <= self.visibility_noise <= 4.0:
             raise ValueError(
                 f"visibility_noise must lie in 0..4 (x the measured), got {self.visibility_noise}"
@@ -65,7 +72,7 @@ class CaptureNoise:
             sd_j = sd * measured.visibility_factor(vis)  # (..., 33)
             e = rng.standard_normal(m.shape)
             m[..., :2] += sd_j[..., None] * e[..., :2]
-            m[..., 2] += measured.Z_OVER_XY * sd_j * e[..., 2]
+            m[..., 2] += self.depth_jitter * measured.Z_OVER_XY * sd_j * e[..., 2]
         if self.visibility_noise > 0:
             noise = self.visibility_noise * measured.visibility_noise_sd(vis)
             vis = np.clip(vis + noise * rng.standard_normal(vis.shape), 0.0, 1.0)

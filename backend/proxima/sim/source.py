@@ -103,6 +103,7 @@ class SimSource(FrameSource):
         self.noise = CaptureNoise(
             base.jitter if parsed.jitter is None else parsed.jitter,
             base.visibility_noise if parsed.visibility_noise is None else parsed.visibility_noise,
+            base.depth_jitter if parsed.depth_jitter is None else parsed.depth_jitter,
         )
         self.rng = np.random.default_rng([self.scene.seed, zlib.crc32(self.camera_name.encode())])
 

@@ -21,8 +21,9 @@ Keys of the camera (each stream its own):
   in front of the operator at 1.8 m; `look=NORTH,EAST,HEIGHT` what it aims at (default:
   the operator's chest), or `yaw=DEG&pitch=DEG` (clockwise from north; up positive),
   `roll=DEG`; `hfov=DEG` (70), `size=WIDTHxHEIGHT` (1280x720);
-- `jitter=X`, `visnoise=X`: the live pose path's noise, times the measured (scene file
-  or 1; 0 = none).
+- `jitter=X`, `visnoise=X`, `zjitter=X`: the live pose path's noise, times the measured
+  (x and y jitter, visibility noise, z's jitter ratio; the scene file's, else 1; 0 =
+  none).
 """
 
 from __future__ import annotations
@@ -33,7 +34,9 @@ from dataclasses import dataclass
 from proxima.ingest.base import SourceError
 
 SCENE_KEYS = ("script", "seed", "loop", "fps", "bystanders")
-CAMERA_KEYS = ("at", "look", "yaw", "pitch", "roll", "hfov", "size", "jitter", "visnoise")
+CAMERA_KEYS = (
+    "at", "look", "yaw", "pitch", "roll", "hfov", "size", "jitter", "visnoise", "zjitter"
+)
 MAX_BYSTANDERS = 4
 
 
@@ -54,6 +57,7 @@ class SimUri:
     size: tuple[int, int] = (1280, 720)
     jitter: float | None = None
     visibility_noise: float | None = None
+    depth_jitter: float | None = None
 
     def option(self, key: str) -> str | None:
         return dict(self.scene_options).get(key)
@@ -126,6 +130,8 @@ def parse_sim_uri(uri: str) -> SimUri:
             fields["jitter"] = _bounded(uri, key, value, 8.0)
         elif key == "visnoise":
             fields["visibility_noise"] = _bounded(uri, key, value, 4.0)
+        elif key == "zjitter":
+            fields["depth_jitter"] = _bounded(uri, key, value, 8.0)
         else:
             known = ", ".join(SCENE_KEYS + CAMERA_KEYS)
             raise _fail(uri, f"unknown key {key!r}; known: {known}")
