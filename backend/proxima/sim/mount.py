@@ -34,7 +34,7 @@ class CameraMount(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     offset_m: Vec3 = Field(
-        (0.1, 0.0, 0.05), description="lens from the vehicle's centre: forward, right, down (m)"
+        (0.1, 0.0, 0.0), description="lens from the vehicle's centre: forward, right, down (m)"
     )
     yaw_deg: float = Field(0.0, ge=-180.0, le=180.0, description="from the vehicle's heading")
     pitch_deg: float = Field(-8.0, ge=-90.0, le=30.0, description="up positive; down negative")
