@@ -94,8 +94,10 @@ def measure(checkpoint: Path | None, seeds: list[int]) -> dict[str, Any]:
         "checkpoint": str(checkpoint) if checkpoint else "shipped default",
         "seeds": seeds,
         "camera": {"distance_m": 5.0, "height_m": 2.5, **mount.model_dump()},
-        "noise": {k: dict(zip(("jitter", "visibility_noise", "depth_jitter"), v, strict=True))
-                  for k, v in NOISE.items()},  # fmt: skip
+        "noise": {
+            k: dict(zip(("jitter", "visibility_noise", "depth_jitter"), v, strict=True))
+            for k, v in NOISE.items()
+        },
         "seconds": round(time.perf_counter() - t0, 1),
         "cells": cells,
     }

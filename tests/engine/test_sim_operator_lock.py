@@ -51,11 +51,15 @@ def run(uri: str, classifier):  # type: ignore[no-untyped-def]
     bus.add_listener(lambda e: commands.append(e) if isinstance(e, CommandEvent) else None)
     bus.add_listener(lambda e: poses.append(e) if isinstance(e, PoseEvent) else None)
     bus.add_listener(
-        lambda e: sure.add(e.gesture) if isinstance(e, GestureEvent) and e.confidence >= 0.9 else None
+        lambda e: (
+            sure.add(e.gesture) if isinstance(e, GestureEvent) and e.confidence >= 0.9 else None
+        )
     )
     engine = Engine([StreamSpec(name="cam", uri=uri)], bus, realtime=False, classifier=classifier)
     stages = []
-    engine.add_tap("cam", on_frame=lambda f: stages.append(engine.pipelines["cam"]._pose_stage) or None)
+    engine.add_tap(
+        "cam", on_frame=lambda f: stages.append(engine.pipelines["cam"]._pose_stage) or None
+    )
     engine.run()
     stage = stages[-1]
     assert stage is not None and stage.estimator is None  # the tracker only: no MediaPipe

@@ -180,4 +180,3 @@ def test_a_loss_before_the_move_or_without_a_climb_fails() -> None:
     v = _geometric(blind)
     assert not v.passed and "did not frame the operator" in v.reasons[-1]
     assert not _geometric([e for e in geometric_flight() if e["kind"] != "handover"]).passed
-

@@ -28,7 +28,9 @@ def _flying(clock: ManualClock, altitude: float = 2.5) -> MemoryLink:
     return link
 
 
-def _settle(link: MemoryLink, target: tuple[float, float, float], yaw_deg: float = 0.0) -> Telemetry:
+def _settle(
+    link: MemoryLink, target: tuple[float, float, float], yaw_deg: float = 0.0
+) -> Telemetry:
     """Wait until the vehicle is still at `target`, heading `yaw_deg`."""
 
     def there(t: Telemetry) -> bool:
@@ -45,7 +47,11 @@ def test_the_mount_follows_position_and_yaw() -> None:
     clock = ManualClock()
     link = _flying(clock)
     mount = CameraMount(offset_m=(0.2, 0.05, 0.1), pitch_deg=-10.0)
-    for yaw_deg, target in ((0.0, (0.0, 0.0, -2.5)), (90.0, (1.0, -2.0, -3.0)), (-135.0, (0.5, 0.5, -2.0))):
+    for yaw_deg, target in (
+        (0.0, (0.0, 0.0, -2.5)),
+        (90.0, (1.0, -2.0, -3.0)),
+        (-135.0, (0.5, 0.5, -2.0)),
+    ):
         assert link.goto_local(*target, yaw=math.radians(yaw_deg)).ok
         tel = _settle(link, target, yaw_deg)
         assert tel.position is not None

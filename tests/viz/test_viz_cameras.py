@@ -47,7 +47,9 @@ def _settings() -> Settings:
 
 
 def test_the_frustum_is_the_cameras_view() -> None:
-    cam = Camera((0.0, 0.0, -2.0), yaw_deg=90.0, pitch_deg=0.0, hfov_deg=90.0, width=200, height=100)
+    cam = Camera(
+        (0.0, 0.0, -2.0), yaw_deg=90.0, pitch_deg=0.0, hfov_deg=90.0, width=200, height=100
+    )
     c = frustum_corners(cam, depth=2.0)
     np.testing.assert_allclose(c[0], [0.0, 0.0, -2.0])
     # Looking east, 90 degrees wide: the far corners 2 m east, 2 m to either side.

@@ -31,9 +31,7 @@ def demo(
     ] = None,
     sim: Annotated[
         bool,
-        typer.Option(
-            "--sim", help="the closed-loop simulator: config/demo-sim.toml (docs/sim.md)"
-        ),
+        typer.Option("--sim", help="the closed-loop simulator: config/demo-sim.toml (docs/sim.md)"),
     ] = False,
     port: Annotated[int | None, typer.Option(help="console HTTP port (0: any free)")] = None,
     view_port: Annotated[int | None, typer.Option(help="3D view port (0: any free)")] = None,

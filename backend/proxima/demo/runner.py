@@ -131,7 +131,9 @@ class Demo:
         """Yaw (radians) from a drone's local position toward `view.operator_position`."""
         from proxima.drone.heading import HeadingPolicy, bearing
 
-        policy = HeadingPolicy.from_drones(self.settings.drones, self.settings.view.operator_position)
+        policy = HeadingPolicy.from_drones(
+            self.settings.drones, self.settings.view.operator_position
+        )
         return bearing(position, policy.operator_ne[name])
 
     # --- the replay loop -------------------------------------------------------------------

@@ -51,9 +51,7 @@ class HeadingPolicy:
             if mode == "face_operator" and drone not in self.operator_ne:
                 raise ValueError(f"drone {drone}: face_operator needs the operator's place")
 
-    def yaw_for(
-        self, drone: str, tel: Telemetry, target: Sequence[float]
-    ) -> float | None:
+    def yaw_for(self, drone: str, tel: Telemetry, target: Sequence[float]) -> float | None:
         """The yaw (radians) to send with a move of `drone` to local NED `target`, or
         None to send none."""
         mode = self.modes.get(drone, "free")
@@ -67,9 +65,7 @@ class HeadingPolicy:
         return bearing(target, op)
 
     @classmethod
-    def from_drones(
-        cls, drones: Sequence[Any], operator_enu: Sequence[float]
-    ) -> HeadingPolicy:
+    def from_drones(cls, drones: Sequence[Any], operator_enu: Sequence[float]) -> HeadingPolicy:
         """From the console's drones (`DroneSettings`: name, `home` (x east, y north, z
         up), `heading`) and the operator's place (x east, y north)."""
         modes = {d.name: d.heading for d in drones}

@@ -5,7 +5,8 @@ Replayed frames carry their pose, so pose estimation and operator tracking are s
 for them (the replayed landmarks are used exactly as recorded); camera frames go through
 MediaPipe and the operator tracker, created on the first image so a replay never loads
 MediaPipe; a simulated camera's frames list the people it sees (`Frame.poses`) and go
-through the operator tracker only. The result of every frame is a `StreamUpdate` for the decision path.
+through the operator tracker only. The result of every frame is a `StreamUpdate` for the
+decision path.
 
 Two hooks let other parts join without touching the pipeline's state from their own
 threads: frame taps (`proxima.engine.taps`) and the classifier swap. A swap is requested

@@ -1,7 +1,7 @@
 """`proxima scenario paper-flight`, `sim-two-drones` and `sim-handover`: the paper's
 flights reproduced end to end in simulation (the last in the closed-loop simulator),
-each writing a JSON result and a flight-path PNG beside it. Exit code 0 when the verdict passed, 1 when it failed, 2
-when the scenario could not be set up."""
+each writing a JSON result and a flight-path PNG beside it. Exit code 0 when the verdict
+passed, 1 when it failed, 2 when the scenario could not be set up."""
 
 from __future__ import annotations
 
@@ -144,7 +144,9 @@ def sim_handover(
     noise: Annotated[
         float,
         typer.Option(
-            min=0.0, max=4.0, help="the live pose path's jitter and visibility noise, x the measured"
+            min=0.0,
+            max=4.0,
+            help="the live pose path's jitter and visibility noise, x the measured",
         ),
     ] = 1.0,
     depth_noise: Annotated[
@@ -184,4 +186,3 @@ def sim_handover(
         "Closed-loop handover: the main drone's climb takes the operator's feet out of view",
         checkpoint,
     )
-

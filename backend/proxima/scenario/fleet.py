@@ -197,4 +197,3 @@ def turn_to(link: DroneLink, yaw: float, timeout: float = 10.0) -> Telemetry:
     if out is None:
         raise RuntimeError(f"{link.name}: did not turn to {math.degrees(yaw):.0f} deg in time")
     return out
-

@@ -260,9 +260,7 @@ def check_geometric_loss(
     handover to `secondary`; and the secondary's camera saw the whole operator when it
     took over."""
     cmd = next((c for c in gesture_commands(timeline) if c["command"] == move), None)
-    hand = next(
-        (h for h in drone_handovers(timeline) if h["from_stream"] == main), None
-    )
+    hand = next((h for h in drone_handovers(timeline) if h["from_stream"] == main), None)
     views = [e for e in entries(timeline, "view") if e.get("stream") == main]
     if cmd is None or hand is None:
         verdict.check(False, "", f"no {move} command or no handover from {main}: nothing to judge")

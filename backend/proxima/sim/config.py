@@ -43,8 +43,7 @@ from proxima.sim.scene import Scene
 from proxima.synth.body import Placement
 
 DEFAULT_SCRIPT = (
-    "hover:4,have_command:4,move_to_left:4,move_to_right:4,move_upward:4,"
-    "move_downward:4,wave_off:4"
+    "hover:4,have_command:4,move_to_left:4,move_to_right:4,move_upward:4,move_downward:4,wave_off:4"
 )
 
 
@@ -166,7 +165,5 @@ def build_scene(cfg: SceneConfig, name: str) -> Scene:
                 steps=parse_script(b.script) if b.script else (),
             )
         )
-    noise = CaptureNoise(
-        cfg.capture.jitter, cfg.capture.visibility_noise, cfg.capture.depth_jitter
-    )
+    noise = CaptureNoise(cfg.capture.jitter, cfg.capture.visibility_noise, cfg.capture.depth_jitter)
     return Scene(name, people, cfg.fps, cfg.loop, noise, cfg.seed)

@@ -75,7 +75,9 @@ def parse_script(text: str | Sequence[Sequence[object]]) -> list[tuple[str, floa
         try:
             s = float(seconds)  # type: ignore[arg-type]
         except (TypeError, ValueError):
-            raise ScriptError(f"script step {name}: {seconds!r} is not a number of seconds") from None
+            raise ScriptError(
+                f"script step {name}: {seconds!r} is not a number of seconds"
+            ) from None
         if not (math.isfinite(s) and 0 < s <= 600):
             raise ScriptError(f"script step {name}: {seconds!r} s must lie in (0, 600]")
         steps.append((name, s))
@@ -110,7 +112,9 @@ class Person:
         return self.world[k % len(self.world)][[11, 12, 23, 24]].mean(axis=0)
 
 
-def _place(points: np.ndarray, north: np.ndarray, east: np.ndarray, heading_deg: np.ndarray) -> np.ndarray:
+def _place(
+    points: np.ndarray, north: np.ndarray, east: np.ndarray, heading_deg: np.ndarray
+) -> np.ndarray:
     """Body-frame points (T, 33, 3) (x forward, y left, z up) -> NED, with a placement
     per frame (`Placement.to_world`, vectorised over time)."""
     h = np.deg2rad(heading_deg)[:, None]
@@ -241,9 +245,7 @@ def bystander(
     return Person(name, behaviour, body, world, labels)
 
 
-def _two_bone(
-    hip: np.ndarray, ankle: np.ndarray, thigh: float, shank: float
-) -> np.ndarray:
+def _two_bone(hip: np.ndarray, ankle: np.ndarray, thigh: float, shank: float) -> np.ndarray:
     """Knees (T, 3) between hips and ankles (body frame), bending forward (+x)."""
     d_vec = ankle - hip
     d = np.clip(np.linalg.norm(d_vec, axis=-1, keepdims=True), 1e-6, thigh + shank - 1e-6)

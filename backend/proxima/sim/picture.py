@@ -124,7 +124,7 @@ def render(out: Path, seed: int = 2) -> Path:
         ax = fig.add_subplot(slot)
         view = scene.view(cam, k)
         size = np.array([cam.width, cam.height])
-        for pv, (person, world) in zip(view.people, people, strict=True):
+        for pv, (person, _world) in zip(view.people, people, strict=True):
             seen = pv.pose
             if seen is None:
                 continue
@@ -135,7 +135,9 @@ def render(out: Path, seed: int = 2) -> Path:
                 alpha = float(0.15 + 0.85 * min(vis[a], vis[b]))
                 ax.plot(p[[a, b], 0], p[[a, b], 1], color=c, lw=1.3, alpha=alpha)
             ax.scatter(p[:, 0], p[:, 1], s=6, color=c, alpha=0.6)
-        ax.add_patch(plt.Rectangle((0, 0), cam.width, cam.height, fill=False, lw=2, ec=DRONES[name]))
+        ax.add_patch(
+            plt.Rectangle((0, 0), cam.width, cam.height, fill=False, lw=2, ec=DRONES[name])
+        )
         ax.set_xlim(-80, cam.width + 80)
         ax.set_ylim(cam.height + 260, -60)
         ax.set_aspect("equal")

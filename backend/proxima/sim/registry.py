@@ -168,12 +168,16 @@ def scene_for(uri: SimUri) -> Scene:
     if "fps" in opts:
         update["fps"] = float(opts["fps"])
     if "script" in opts:
-        update["operator"] = OperatorConfig(**{**cfg.operator.model_dump(), "script": opts["script"]})
+        update["operator"] = OperatorConfig(
+            **{**cfg.operator.model_dump(), "script": opts["script"]}
+        )
     if "bystanders" in opts:
         update["bystanders"] = [*cfg.bystanders, *DEFAULT_BYSTANDERS[: int(opts["bystanders"])]]
     cfg = cfg.model_copy(update=update)
-    name = uri.scene if not uri.scene_options else f"{uri.scene}?" + "&".join(
-        f"{k}={v}" for k, v in uri.scene_options
+    name = (
+        uri.scene
+        if not uri.scene_options
+        else f"{uri.scene}?" + "&".join(f"{k}={v}" for k, v in uri.scene_options)
     )
     built = build_scene(cfg, name)
     with _lock:

@@ -222,7 +222,9 @@ class Scene:
             for p, person in enumerate(self.people):
                 pose = None
                 if bool(block.detected[p][i]):
-                    pose = Pose(t=t, xyz=block.xyz[p][i], visibility=block.vis[p][i], image_size=size)
+                    pose = Pose(
+                        t=t, xyz=block.xyz[p][i], visibility=block.vis[p][i], image_size=size
+                    )
                 sight = operator_sight(pose) if person.operator else Sight.NONE
                 people.append(PersonView(person.name, person.operator, pose, sight))
         v = View(camera_name, k, t, camera, tuple(people))
@@ -268,6 +270,7 @@ class Scene:
         if name:
             self._blocks[name] = block
         return block
+
     def views(self) -> dict[str, View]:
         """The newest view of every camera that looked (a copy)."""
         with self._lock:

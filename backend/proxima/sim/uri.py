@@ -35,7 +35,16 @@ from proxima.ingest.base import SourceError
 
 SCENE_KEYS = ("script", "seed", "loop", "fps", "bystanders")
 CAMERA_KEYS = (
-    "at", "look", "yaw", "pitch", "roll", "hfov", "size", "jitter", "visnoise", "zjitter"
+    "at",
+    "look",
+    "yaw",
+    "pitch",
+    "roll",
+    "hfov",
+    "size",
+    "jitter",
+    "visnoise",
+    "zjitter",
 )
 MAX_BYSTANDERS = 4
 
@@ -136,7 +145,10 @@ def parse_sim_uri(uri: str) -> SimUri:
             known = ", ".join(SCENE_KEYS + CAMERA_KEYS)
             raise _fail(uri, f"unknown key {key!r}; known: {known}")
     if drone and any(k in fields for k in ("at", "look", "yaw_deg", "pitch_deg", "roll_deg")):
-        raise _fail(uri, f"#{drone}: the drone's camera goes where the drone goes; drop at/look/yaw/pitch/roll")
+        raise _fail(
+            uri,
+            f"#{drone}: the drone's camera goes where the drone goes; drop at/look/yaw/pitch/roll",
+        )
     if "look" in fields and ("yaw_deg" in fields or "pitch_deg" in fields):
         raise _fail(uri, "give look= or yaw=/pitch=, not both")
     return SimUri(

@@ -203,4 +203,3 @@ class CommandExecutor:
                 reason = f"link {link.state}"
                 return self.recorder.finish(event, ctx, "hold", "refused", reason)
             return self.sent(event, ctx, "hold", link.hold(), link, track="hold")
-
