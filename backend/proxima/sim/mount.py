@@ -71,7 +71,7 @@ class CameraMount(BaseModel):
             return None
         pos = np.asarray(home_ned, np.float64) + np.asarray(tel.position, np.float64)
         attitude = tel.attitude if tel.attitude is not None else (0.0, 0.0, tel.yaw)
-        return self.camera(pos, attitude)
+        return self.camera(pos.tolist(), attitude)
 
 
 def _zyx_angles(r: np.ndarray) -> tuple[float, float, float]:

@@ -57,10 +57,10 @@ def parse_script(text: str | Sequence[Sequence[object]]) -> list[tuple[str, floa
         for part in (p.strip() for p in text.split(",")):
             if not part:
                 continue
-            name, sep, seconds = part.partition(":")
+            gesture, sep, duration = part.partition(":")
             if not sep:
                 raise ScriptError(f"script step {part!r}: expected GESTURE:SECONDS")
-            pairs.append((name.strip(), seconds.strip()))
+            pairs.append((gesture.strip(), duration.strip()))
     else:
         pairs = list(text)
     steps: list[tuple[str, float]] = []
@@ -180,7 +180,7 @@ def _random_arms(rng: np.random.Generator, seconds: float) -> list[GestureDraw]:
     draws: list[GestureDraw] = []
     total = 0.0
     while total < seconds:
-        pose = []
+        pose: list[tuple[float, ...]] = []
         for _ in range(2):
             pose.append(
                 (

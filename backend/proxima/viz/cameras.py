@@ -75,7 +75,7 @@ def frustum_segments(camera: Camera, depth: float = FRUSTUM_DEPTH_M) -> np.ndarr
     return np.asarray(segs, np.float32)
 
 
-def sight_line(camera: Camera, target_enu: Sequence[float]) -> np.ndarray:
+def sight_line(camera: Camera, target_enu: Sequence[float] | np.ndarray) -> np.ndarray:
     """(1, 2, 3): from the camera to the operator's point, in the view's frame."""
     start = ned_to_enu(np.asarray(camera.position))
     return np.asarray([[start, np.asarray(target_enu, np.float64)]], np.float32)

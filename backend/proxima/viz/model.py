@@ -59,7 +59,7 @@ class DroneTrack:
     armed: bool = False
     mode: str = ""
     attitude: tuple[float, float, float] | None = None  # roll, pitch, yaw (radians)
-    mount: CameraMount = field(default_factory=CameraMount)
+    mount: CameraMount = field(default_factory=lambda: CameraMount())
 
     def camera(self) -> Camera | None:
         """The drone's camera in the scene's NED frame (None before a position)."""
