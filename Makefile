@@ -1,12 +1,14 @@
 # The two set-up commands: `make demo` and `make test`. Both create .venv when missing and
 # install idempotently (a stamp file records the last install of pyproject.toml).
+# `make test-fast` is the quick tier (lint, types, tests not marked slow); `make wheel`
+# builds dist/proxima-*.whl (it needs the console built: `make frontend`).
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 FRONT_STAMP := static/.built
 
-.PHONY: demo test install lint frontend bench clean
+.PHONY: demo test test-fast install lint typecheck frontend bench wheel clean
 
 $(BIN)/python:
 	$(PY) -m venv $(VENV)
@@ -45,11 +47,24 @@ lint: install
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 
-test: install frontend lint
+typecheck: install
+	$(BIN)/mypy
+
+test: install frontend lint typecheck
 	$(BIN)/python -m pytest -q
 
+# No model training, simulator processes, browser, RTSP server or wheel build (the tests
+# marked slow, see tests/conftest.py); under 3 minutes on a 2-core machine.
+test-fast: install lint typecheck
+	$(BIN)/python -m pytest -q -m "not slow"
+
+# Every benchmark at bounded sizes; results in bench/results/latest/ (bench/run_all.py).
 bench: install
 	$(BIN)/python -m bench.run_all
 
+wheel: install frontend
+	rm -rf dist
+	$(BIN)/python -m pip wheel -q --no-deps --no-build-isolation -w dist .
+
 clean:
-	rm -rf $(VENV) static/assets $(FRONT_STAMP)
+	rm -rf $(VENV) static/assets $(FRONT_STAMP) build dist

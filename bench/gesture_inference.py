@@ -1,7 +1,7 @@
 """Gesture model speed: inference latency for one window (batch 1, median of 200 after
 warm-up, 1 and 2 torch threads) and training time per epoch, for each model.
 
-    .venv/bin/python -m bench.gesture_inference [--checkpoint models/gesture-default.pt]
+    .venv/bin/python -m bench.gesture_inference [--epochs 2] [--out PATH]
 
 Writes bench/results/gesture_inference.json. Absolute times on this shared 2-core machine
 are noisy; the ratios between models and thread counts are the stable part.
@@ -46,6 +46,7 @@ def latency_ms(model: torch.nn.Module, x: torch.Tensor, threads: int, n: int = 2
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--epochs", type=int, default=2, help="epochs timed per model")
+    ap.add_argument("--out", type=Path, default=OUT, help="results JSON")
     args = ap.parse_args()
     data = load_data(None)
     parts = split_clips(data.clips, "temporal")
@@ -71,9 +72,9 @@ def main() -> None:
         entry["train_seconds_per_epoch"] = float(np.median([h.seconds for h in hist]))
         results["models"][name] = entry
         print(name, json.dumps(entry))
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(json.dumps(results, indent=1))
-    print(f"-> {OUT}")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(results, indent=1))
+    print(f"-> {args.out}")
 
 
 if __name__ == "__main__":

@@ -18,12 +18,11 @@ from collections.abc import Sequence
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "results"
-ROOT = Path(__file__).resolve().parent.parent
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--checkpoint", type=Path, default=ROOT / "models" / "gesture-default.pt")
+    ap.add_argument("--checkpoint", type=Path, default=None, help="default: the shipped model")
     ap.add_argument("--data", default=None, help="LASER folder (default: resolved)")
     ap.add_argument("--out", type=Path, default=RESULTS / "still_operator.json")
     args = ap.parse_args(argv)
@@ -33,12 +32,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     torch.set_num_threads(1)
     from proxima.evaluation.plots import plot_stances
     from proxima.evaluation.still import still_operator
+    from proxima.gesture.classifier import default_checkpoint
     from proxima.gesture.data_source import resolve_dataset
     from proxima.gesture.laser import load_laser_dir
 
     started = time.perf_counter()
     clips = load_laser_dir(resolve_dataset(args.data))
-    result = still_operator(args.checkpoint, clips)
+    result = still_operator(args.checkpoint or default_checkpoint(), clips)
     result["command"] = "python -m bench.still_operator " + shlex.join(argv or sys.argv[1:])
     result["date"] = time.strftime("%Y-%m-%d")
     result["seconds"] = round(time.perf_counter() - started, 1)

@@ -1,10 +1,28 @@
-"""Shared fixtures: the real data sets in ../shared (tests never download)."""
+"""Shared fixtures: the real data sets in ../shared (tests never download: the pose
+model and the data sets resolve offline, `PROXIMA_OFFLINE`)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
+
+# Subprocesses the tests start inherit it too.
+os.environ["PROXIMA_OFFLINE"] = "1"
+
+# A test that uses one of these is slow wherever it lies: it trains a model, starts a
+# simulated vehicle or drives a browser. Tests that start other processes or servers
+# (the CLI, RTSP, the wheel) carry `@pytest.mark.slow` themselves; `make test-fast`
+# runs the rest.
+SLOW_FIXTURES = frozenset({"small_checkpoint", "start_sim", "browser"})
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        if SLOW_FIXTURES.intersection(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.slow)
+
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"

@@ -7,7 +7,8 @@ fields with a double underscore: `PROXIMA_SERVER__PORT=8100`, lists as JSON:
 
 Each section is the subsystem's own model, not a copy: `[[streams]]` are
 `proxima.engine.StreamSpec`, `[engine]` is `proxima.engine.EngineSettings`, `[recognition]`
-is `proxima.control.ControlSettings`, `[safety]` is `proxima.drone.safety.SafetyConfig`.
+is `proxima.control.ControlSettings`, `[safety]` is `proxima.drone.safety.SafetyConfig`,
+`[training]` is `proxima.federated.settings.TrainingSettings`.
 Keys that were renamed still work for now: `DEPRECATED_KEYS` moves them to their new place
 with a `DeprecationWarning` and a log line naming both.
 
@@ -24,7 +25,7 @@ import tomllib
 import warnings
 from contextvars import ContextVar
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, SecretStr, ValidationError, model_validator
 from pydantic_settings import (
@@ -37,6 +38,8 @@ from proxima.control.config import ControlSettings
 from proxima.drone.heading import HeadingMode
 from proxima.drone.safety import SafetyConfig
 from proxima.engine.config import EngineSettings, StreamSpec
+from proxima.federated.settings import TrainingSettings
+from proxima.shipped import STATIC_DIR, shipped_path
 from proxima.sim.mount import CameraMount
 
 log = logging.getLogger(__name__)
@@ -105,7 +108,7 @@ class ServerSettings(_Section):
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
     db_path: Path = Path("runs/proxima.db")
-    static_dir: Path | None = None  # default: <repo>/static
+    static_dir: Path | None = None  # default: the shipped console (proxima.shipped)
     models_dir: Path = Path("models")
     session_ttl_s: float = Field(12 * 3600, gt=0)
     viser_enabled: bool = True
@@ -123,14 +126,6 @@ class ViewSettings(_Section):
     operator_height_m: float = Field(1.75, gt=0)
     trail_points: int = Field(300, ge=2)
     update_hz: float = Field(10.0, gt=0)
-
-
-class TrainingSettings(_Section):
-    """Federated runs started from the console: on Flower's Deployment Runtime (a local
-    SuperLink and one SuperNode per drone, the default) or its Simulation Runtime."""
-
-    enabled: bool = True
-    flower_runtime: Literal["deployment", "simulation"] = "deployment"
 
 
 # Documented keys that were renamed, old path -> new path (section, [table,] key). Each
@@ -340,7 +335,8 @@ class Settings(BaseSettings):
         raise KeyError(name)
 
     def static_dir(self) -> Path:
-        """Where the built frontend lies (static/ at the repository root by default)."""
+        """Where the built frontend lies: `[server] static_dir`, else the one shipped
+        with Proxima (static/ in a checkout, inside the package in a wheel)."""
         if self.server.static_dir is not None:
             return self.server.static_dir
-        return Path(__file__).resolve().parents[2] / "static"
+        return shipped_path(STATIC_DIR)

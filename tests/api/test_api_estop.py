@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 import httpx
+import pytest
 from api_helpers import ADMIN, VIEWER, Api
 
 from proxima.api.runtime import build_runtime
@@ -26,6 +27,7 @@ def test_without_a_drone_link_it_is_unavailable(api: Api) -> None:
     assert api.client.post("/api/drones/ghost/emergency-stop", headers=api.admin).status_code == 404
 
 
+@pytest.mark.slow
 def test_two_steps_against_a_simulated_drone(tmp_path: Path) -> None:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))

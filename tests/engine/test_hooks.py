@@ -130,6 +130,7 @@ def second_checkpoint(tmp_path_factory, classifier) -> Path:
     return save_checkpoint(path, model, classifier.model_name, classifier.pipeline, 60, meta)
 
 
+@pytest.mark.slow
 def test_swapping_the_classifier_from_another_thread_mid_stream(
     laser_dir, classifier, second_checkpoint
 ) -> None:

@@ -47,6 +47,7 @@ def stitched(laser_clips, tmp_path_factory) -> tuple[Path, dict]:
     return folder / "front.csv", stream.truth()
 
 
+@pytest.mark.slow
 def test_commands_follow_the_script_and_never_come_before_arming(
     stitched, checkpoint, tmp_path
 ) -> None:

@@ -28,6 +28,7 @@ def shipped() -> GestureClassifier:
     return GestureClassifier.load(SHIPPED)
 
 
+@pytest.mark.slow
 def test_tuning_picks_the_fastest_setting_under_one_wrong_command_per_hour(
     laser_clips, shipped
 ) -> None:

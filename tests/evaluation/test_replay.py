@@ -60,9 +60,15 @@ def test_the_offline_replay_decides_as_the_engine_when_the_operator_is_lost(
 @pytest.mark.parametrize(
     ("stride", "params"),
     [
-        (3, {"threshold": 0.75, "confirm": 1, "debounce_s": 1.0}),
+        pytest.param(
+            3, {"threshold": 0.75, "confirm": 1, "debounce_s": 1.0}, marks=pytest.mark.slow
+        ),
         (5, {"threshold": 0.0, "confirm": 1, "debounce_s": 10.0}),  # the paper's filter
-        (3, {"confirm": 3, "confirm_by_command": {"land": 12}, "release_s": 1.0}),
+        pytest.param(
+            3,
+            {"confirm": 3, "confirm_by_command": {"land": 12}, "release_s": 1.0},
+            marks=pytest.mark.slow,
+        ),
     ],
 )
 def test_the_offline_replay_decides_as_the_engine_at_other_settings(

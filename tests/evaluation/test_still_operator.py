@@ -41,12 +41,14 @@ def stances(clips) -> dict[str, dict]:
     return {s["clip"]: s for s in result["stances"]}
 
 
+@pytest.mark.slow
 def test_the_dataset_has_still_stances_in_every_view(clips, stances) -> None:
     view = {c.name: c.view for c in clips}
     assert {view[name] for name in stances} == {"f", "l", "r"}
     assert all(s["armed_at_start"] for s in stances.values())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "clip", ["DJI_0146_have_command_f", "DJI_0161_move_downward_f", "DJI_0173_slow_down_f"]
 )
@@ -54,6 +56,7 @@ def test_standing_with_relaxed_arms_commands_nothing(stances, clip) -> None:
     assert stances[clip]["commands"] == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("clip", "signal"),
     [("DJI_0152_land_f", "land"), ("DJI_0154_land_l", "land"), ("DJI_0149_hover_f", "hover")],

@@ -74,6 +74,7 @@ def test_bad_requests_say_what_is_wrong(laser_clips) -> None:
         stitch_views(laser_clips, [("hover", 2.0)], views=("x",))
 
 
+@pytest.mark.slow
 def test_stitch_command_writes_one_stream_per_view(laser_dir, tmp_path) -> None:
     from typer.testing import CliRunner
 

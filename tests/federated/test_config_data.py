@@ -37,6 +37,7 @@ def test_bad_run_config_names_the_key() -> None:
     assert (cfg.rounds, cfg.include_samples, cfg.strategy) == (7, False, "fedprox")
 
 
+@pytest.mark.slow
 def test_the_mirror_key_turns_mirroring_on_in_the_drones_local_training(laser_clips) -> None:
     assert FLConfig.from_run_config({"mirror": "true"}).mirror
     assert not FLConfig().mirror  # measured without benefit (docs/federated.md)

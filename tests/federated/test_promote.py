@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from fl_helpers import fast_config
 from typer.testing import CliRunner
 
@@ -16,6 +17,7 @@ from proxima.store.training import TrainingStore
 ADMIN = ("chief", "correct-horse-battery")
 
 
+@pytest.mark.slow
 def test_promote_swaps_the_live_engine_classifier(tmp_path: Path, laser_dir: Path) -> None:
     from proxima.api.runtime import build_runtime
     from proxima.api.server import BackgroundServer

@@ -29,6 +29,7 @@ def test_checkpoint_is_one_self_contained_small_file(small_checkpoint, laser_cli
     np.testing.assert_allclose(probs.sum(axis=1), 1, atol=1e-5)
 
 
+@pytest.mark.slow
 def test_paper_lstm_learns_with_clipping(laser_clips) -> None:
     """The paper's network, briefly trained on one view, rises above chance."""
     torch.manual_seed(0)
@@ -69,6 +70,7 @@ def test_the_chosen_schedule_ends_at_the_epoch_early_stopping_kept() -> None:
     assert chosen_schedule(logs, 2e-3) == [2e-3, 2e-3]
 
 
+@pytest.mark.slow
 def test_the_refit_trains_a_fresh_model_at_the_replayed_rates(laser_clips) -> None:
     """`fit_schedule` runs one epoch per rate, at that rate, and learns from data."""
     parts = split_clips([c for c in laser_clips if c.view == "f"], "temporal")
@@ -84,6 +86,7 @@ def test_the_refit_trains_a_fresh_model_at_the_replayed_rates(laser_clips) -> No
     assert history[-1].train_loss < history[0].train_loss
 
 
+@pytest.mark.slow
 def test_train_with_refit_saves_the_model_trained_on_the_whole_training_part(
     laser_dir, tmp_path
 ) -> None:
@@ -101,6 +104,7 @@ def test_train_with_refit_saves_the_model_trained_on_the_whole_training_part(
     assert meta["train_config"]["refit"] is True
 
 
+@pytest.mark.slow
 def test_train_and_evaluate_with_the_body_image_pipeline(laser_dir, tmp_path) -> None:
     out = tmp_path / "image.pt"
     result = CliRunner().invoke(
@@ -117,6 +121,7 @@ def test_train_and_evaluate_with_the_body_image_pipeline(laser_dir, tmp_path) ->
     assert json.loads((tmp_path / "image.json").read_text())["accuracy"] > 1 / 13
 
 
+@pytest.mark.slow
 def test_one_seed_trains_one_model(laser_dir, tmp_path) -> None:
     # The initial weights are seeded too: two runs of one command give the same file
     # content, a third with another seed does not.

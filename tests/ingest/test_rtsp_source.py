@@ -144,6 +144,7 @@ class Consumer:
             self.error = exc
 
 
+@pytest.mark.slow
 def test_rtsp_live_then_server_killed_and_restarted_reconnects(server: RtspServer) -> None:
     changes: list[StateChange] = []
     src = open_source(
@@ -187,6 +188,7 @@ def test_rtsp_live_then_server_killed_and_restarted_reconnects(server: RtspServe
         assert c.uri == src.uri and c.previous != c.state
 
 
+@pytest.mark.slow
 def test_slow_consumer_gets_newest_frames_and_a_paused_server_shows_stalled(
     server: RtspServer,
 ) -> None:

@@ -17,6 +17,7 @@ skimage_data = pytest.importorskip("skimage.data")
 LASER = Path(__file__).resolve().parents[2].parent / "shared" / "datasets" / "laser-uav-gesture"
 
 
+@pytest.mark.slow
 def test_video_file_through_pose_and_tracker(tmp_path: Path) -> None:
     photo = np.ascontiguousarray(skimage_data.astronaut()[:, :, ::-1])
     video = tmp_path / "astronaut.mp4"

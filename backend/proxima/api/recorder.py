@@ -17,7 +17,7 @@ import numpy as np
 from sqlalchemy.orm import sessionmaker
 
 from proxima.api.events import RecordingEvent
-from proxima.events import EventBus
+from proxima.events import EventBus, PoseEvent
 from proxima.store.samples import add_sample
 
 MAX_FRAMES = 900  # 30 s at 30 fps
@@ -148,7 +148,7 @@ class SampleRecorder:
             last_pose = time.monotonic()
             while len(times) < rec.frames_total:
                 event = sub.get(timeout=0.25)
-                if event is None or event.stream != rec.stream:
+                if not isinstance(event, PoseEvent) or event.stream != rec.stream:
                     if time.monotonic() - last_pose > self.pose_timeout_s:
                         rec.state = "failed"
                         rec.detail = (

@@ -224,6 +224,7 @@ def build_runtime(
                 bus=bus,
                 flower_runtime=settings.training.flower_runtime,
                 drones=federated_drones(settings),
+                security=settings.training,
             )
         except Exception as exc:
             rt.notes.append(f"federated runner not available: {type(exc).__name__}: {exc}")

@@ -1,5 +1,5 @@
 """`proxima demo` (what `make demo` runs): simulated drones, replayed camera streams in a
-loop, the console and the 3D view, from `config/demo.toml` by default."""
+loop, the console and the 3D view, from the shipped `config/demo.toml` by default."""
 
 from __future__ import annotations
 
@@ -9,14 +9,16 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from proxima.shipped import DEMO_CONFIG, SIM_DEMO_CONFIG, shipped_path
+
 if TYPE_CHECKING:
     from rich.console import Console
 
     from proxima.demo.runner import Demo
     from proxima.settings import Settings
 
-DEFAULT_CONFIG = Path(__file__).resolve().parents[3] / "config" / "demo.toml"
-SIM_CONFIG = DEFAULT_CONFIG.with_name("demo-sim.toml")
+DEFAULT_CONFIG = shipped_path(DEMO_CONFIG)
+SIM_CONFIG = shipped_path(SIM_DEMO_CONFIG)
 
 
 def register(app: typer.Typer) -> None:

@@ -73,8 +73,9 @@ class CommandResult:
     "failed", "unsupported", "temporarily_rejected", "in_progress"), or: "echoed" (a
     position target the vehicle reported back), "sent" (a message MAVLink does not
     acknowledge, and no echo came), "timeout" (no answer after every retry),
-    "link_lost" / "not_connected" (nothing was sent). `confirmed` is True only when the
-    vehicle itself answered.
+    "link_lost" / "not_connected" (nothing was sent), "invalid" (an argument that is not
+    a number that can be flown, such as NaN: nothing was sent). `confirmed` is True only
+    when the vehicle itself answered.
     """
 
     action: str

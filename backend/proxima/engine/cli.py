@@ -23,7 +23,7 @@ def recognize(
     ],
     events: Annotated[Path, typer.Option(help="write every event here, one JSON per line")],
     checkpoint: Annotated[
-        Path | None, typer.Option(help="gesture model (default: models/gesture-default.pt)")
+        Path | None, typer.Option(help="gesture model (default: the shipped gesture-default.pt)")
     ] = None,
     name: Annotated[str, typer.Option(help="stream name in the events")] = "main",
     drone: Annotated[str, typer.Option(help="drone the commands go to (default: NAME)")] = "",
@@ -52,7 +52,8 @@ def recognize(
     console = Console(stderr=True, soft_wrap=True)
     overrides = {"threshold": threshold, "debounce_s": debounce_s, "idle_disarm_s": idle_disarm_s}
     try:
-        control = ControlSettings(**{k: v for k, v in overrides.items() if v is not None})
+        given = {k: v for k, v in overrides.items() if v is not None}
+        control = ControlSettings.model_validate(given)
         settings = EngineSettings(
             checkpoint=checkpoint,
             pose_every=pose_every,

@@ -1,11 +1,11 @@
 """`proxima fl ...`: federated runs on Flower's simulation and deployment engines, their
-curves, and promoting a run's model into the live engine."""
+curves, promoting a run's model into the live engine, and a fleet's certificates."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, NoReturn
 
 import typer
 
@@ -33,7 +33,7 @@ SetOpt = Annotated[
 ModelsDir = Annotated[Path | None, typer.Option(help="Where the global model is saved.")]
 
 
-def _fail(message: str) -> None:
+def _fail(message: str) -> NoReturn:
     typer.secho(f"error: {message}", fg="red", err=True)
     raise typer.Exit(2)
 
@@ -175,17 +175,24 @@ def deploy_local(
     db: DbOpt = None,
     models_dir: ModelsDir = None,
     workdir: Annotated[Path | None, typer.Option(help="Logs and Flower state.")] = None,
+    insecure: Annotated[
+        bool, typer.Option(help="No TLS and no SuperNode keys (loopback only; to compare).")
+    ] = False,
 ) -> None:
     """Run on Flower's deployment engine: a SuperLink and one SuperNode per drone as
-    separate processes on 127.0.0.1, the run submitted with `flwr run`."""
+    separate processes on 127.0.0.1 (TLS and SuperNode authentication with a throwaway
+    CA unless --insecure), the run submitted with `flwr run`."""
     from proxima.federated.deploy import DeploymentError
+    from proxima.federated.pki import PKIError
     from proxima.federated.runner import FederatedRunner
+    from proxima.federated.settings import DeploymentSettings
 
     cfg = _config(rounds=rounds, num_drones=drones, local_epochs=local_epochs, strategy=strategy,
                   partition=partition, min_clients=min_clients, stride=stride, data=data,
                   set_=set_)  # fmt: skip
     db_path, models = _settings_paths(db, models_dir)
-    runner = FederatedRunner(db_path, models, workdir=workdir, defaults=cfg)
+    security = DeploymentSettings(tls=not insecure, supernode_auth=not insecure)
+    runner = FederatedRunner(db_path, models, workdir=workdir, defaults=cfg, security=security)
     bar = _Progress(cfg.rounds, "deploy-local")
     from proxima.federated.events import TrainingRoundEvent, TrainingRunEvent
 
@@ -202,10 +209,17 @@ def deploy_local(
             bar.progress.console.print("starting the SuperLink and SuperNodes on 127.0.0.1 ...")
             try:
                 runner.ensure_federation()
-            except DeploymentError as exc:
+            except (DeploymentError, PKIError) as exc:
                 _fail(str(exc))
             st = runner.status()
-            bar.progress.console.print(f"SuperLink {st['superlink']}, PIDs {st['pids']}")
+            how = (
+                "TLS, SuperNode keys"
+                if st["supernode_auth"]
+                else "TLS"
+                if st["tls"]
+                else "insecure"
+            )
+            bar.progress.console.print(f"SuperLink {st['superlink']} ({how}), PIDs {st['pids']}")
             run_id = runner.start_run({})
             run = runner.wait()
     finally:
@@ -294,10 +308,59 @@ def promote(
     typer.echo(f"promoted {name} (run {run}) into the live engine at {url}")
 
 
+def pki(
+    out: Annotated[Path, typer.Argument(help="Folder of the fleet's certificates and keys.")],
+    host: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="Address the drones dial (IP or host name; repeat for more). "
+            "Makes the ground station's certificate."
+        ),
+    ] = None,
+    drone: Annotated[
+        list[str] | None, typer.Option(help="A drone's name (repeat): its SuperNode key pair.")
+    ] = None,
+) -> None:
+    """Make a fleet's CA, the ground station's TLS certificate and the drones' SuperNode
+    keys (an existing CA and existing drone keys are kept), and say what goes where."""
+    from proxima.federated.pki import PKIError, make_ca, make_drone_key, make_server_cert
+
+    if not host and not drone and (out / "ca" / "ca.crt").is_file():
+        _fail("nothing to do: give --host and/or --drone")
+    ca_cert, ca_key = out / "ca" / "ca.crt", out / "ca" / "ca.key"
+    try:
+        if not ca_cert.is_file():
+            make_ca(out / "ca")
+            typer.echo(f"made the CA: {ca_cert} (keep {ca_key} offline, never on a drone)")
+        if host:
+            creds = make_server_cert(out / "ground", ca_cert, ca_key, host)
+            typer.echo(f"ground station: {creds.cert} for {', '.join(host)}, 127.0.0.1; "
+                       f"key {creds.key}")  # fmt: skip
+        for name in drone or []:
+            folder = out / "drones" / name
+            if (folder / f"{name}.key").exists():
+                typer.echo(f"drone {name}: key kept ({folder / f'{name}.key'})")
+            else:
+                key = make_drone_key(folder, name)
+                typer.echo(f"drone {name}: {key.private_key} (stays on the drone)")
+            (folder / "ca.crt").write_bytes(ca_cert.read_bytes())
+            pub = out / "ground" / "authorized" / f"{name}.pub"
+            pub.parent.mkdir(parents=True, exist_ok=True)
+            pub.write_bytes((folder / f"{name}.pub").read_bytes())
+    except PKIError as exc:
+        _fail(str(exc))
+    typer.echo(
+        f"copy {out / 'ground'} to the ground station ([training] ca_certfile, "
+        f"server_certfile, server_keyfile, authorized_keys), and {out / 'drones'}/NAME to "
+        "drone NAME's companion computer (docs/federated.md, 'A real fleet')"
+    )
+
+
 def register(app: typer.Typer) -> None:
     fl_app.command()(simulate)
     fl_app.command("deploy-local")(deploy_local)
     fl_app.command()(curve)
     fl_app.command()(runs)
     fl_app.command()(promote)
+    fl_app.command()(pki)
     app.add_typer(fl_app, name="fl")

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+import numpy as np
 from flwr.app import ArrayRecord, ConfigRecord, Context, Message, MetricRecord, RecordDict
 from flwr.clientapp import ClientApp
 
@@ -49,7 +50,8 @@ class Node:
 
 
 def config_of(msg: Message) -> FLConfig:
-    rc = {k: v for k, v in msg.content["config"].items() if k not in _SERVER_KEYS}
+    config = msg.content.config_records["config"]
+    rc = {k: v for k, v in config.items() if k not in _SERVER_KEYS}
     return FLConfig.from_run_config(rc)
 
 
@@ -86,10 +88,22 @@ def _local(msg: Message, context: Context) -> tuple[FLConfig, Node, DroneData]:
     return cfg, node, _CACHE[(key, node)]
 
 
+def _arrays(msg: Message) -> dict[str, np.ndarray]:
+    """The global weights a message carries, as numpy arrays."""
+    return {k: a.numpy() for k, a in msg.content.array_records["arrays"].items()}
+
+
+def _int(value: object) -> int:
+    """A run-config number (Flower types record values as any of its value kinds)."""
+    if not isinstance(value, int | float | str):
+        raise TypeError(f"expected a number, got {type(value).__name__}")
+    return int(value)
+
+
 def _reply(
     msg: Message, node: Node, data: DroneData, arrays: ArrayRecord | None, metrics: dict[str, float]
 ) -> Message:
-    content = RecordDict({"metrics": MetricRecord(metrics)})
+    content = RecordDict({"metrics": MetricRecord(dict(metrics))})
     if arrays is not None:
         content["arrays"] = arrays
     content["report"] = ConfigRecord({"drone": node.drone, "notes": "\n".join(data.notes)})
@@ -106,8 +120,8 @@ def train(msg: Message, context: Context) -> Message:
     if not len(data.fit):
         raise RuntimeError(f"drone {node.drone}: no training windows in its data")
     model, pipeline = new_model(cfg)
-    set_weights(model, {k: a.numpy() for k, a in msg.content["arrays"].items()})
-    server_round = int(msg.content["config"].get("server-round", 0))
+    set_weights(model, _arrays(msg))
+    server_round = _int(msg.content.config_records["config"].get("server-round", 0))
     res = train_local(model, pipeline, data.fit, data.val, cfg, server_round, node.partition_id)
     metrics = {
         "num-examples": res.num_examples,
@@ -124,6 +138,6 @@ def train(msg: Message, context: Context) -> Message:
 def evaluate(msg: Message, context: Context) -> Message:
     """The global model on this drone's validation windows."""
     cfg, node, data = _local(msg, context)
-    loss, acc = Scorer(cfg, data.val)({k: a.numpy() for k, a in msg.content["arrays"].items()})
+    loss, acc = Scorer(cfg, data.val)(_arrays(msg))
     metrics = {"num-examples": max(len(data.val), 1), "loss": loss, "accuracy": acc, "seconds": 0.0}
     return _reply(msg, node, data, None, metrics)

@@ -27,6 +27,7 @@ from proxima.events import EventBus
 from proxima.federated.config import ConfigError, FLConfig
 from proxima.federated.deploy import DeploymentError, Drone, LocalFederation, default_drones
 from proxima.federated.events import TrainingRoundEvent, TrainingRunEvent
+from proxima.federated.settings import DeploymentSettings
 from proxima.federated.simulate import new_run_id
 from proxima.store.training import FINISHED, TrainingStore
 
@@ -58,9 +59,11 @@ def config_from_params(params: dict[str, Any], base: FLConfig | None = None) -> 
 
 
 class FederatedRunner:
-    """Runs one federated run at a time, on Flower's Deployment Runtime (a local
-    SuperLink with one SuperNode per drone, started on first use and kept) or its
-    Simulation Runtime (`flower_runtime`). The console's `TrainingRunner`."""
+    """Runs one federated run at a time, on Flower's Deployment Runtime (a SuperLink
+    with one local SuperNode per drone, or the drones' own SuperNodes, started on first
+    use and kept; secured as `security` says, by default TLS and SuperNode keys with a
+    throwaway CA) or its Simulation Runtime (`flower_runtime`). The console's
+    `TrainingRunner`. `close()` ends every Flower process it started."""
 
     def __init__(
         self,
@@ -74,6 +77,7 @@ class FederatedRunner:
         defaults: FLConfig | None = None,
         samples_db: str | Path | None = None,
         poll_s: float = 0.5,
+        security: DeploymentSettings | None = None,
     ) -> None:
         if flower_runtime not in ("deployment", "simulation"):
             raise ValueError(
@@ -88,12 +92,14 @@ class FederatedRunner:
         self.workdir = Path(workdir) if workdir else self.db_path.parent / "federated"
         self.samples_db = str(samples_db) if samples_db else str(self.db_path)
         self._drones = drones
+        self.security = security or DeploymentSettings()
         self.poll_s = poll_s
         self.federation: LocalFederation | None = None
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self._active: str | None = None
         self._stop = threading.Event()
+        self._closing = False
         self.listeners: list[Callable[[Any], None]] = []
 
     # the TrainingRunner interface ----------------------------------------------------------
@@ -134,12 +140,18 @@ class FederatedRunner:
     # control -------------------------------------------------------------------------------
 
     def status(self) -> dict[str, Any]:
-        """Flower runtime, active run, and (deployment) which Flower processes are alive."""
+        """Flower runtime, active run, and (deployment) which Flower processes are alive,
+        how the link is secured and which SuperNode keys are registered."""
         fed = self.federation
+        sec = self.security
         return {
             "engine": self.flower_runtime,
             "active_run": self._active if self.running else None,
             "superlink": fed.address if fed else None,
+            "fleet_address": sec.fleet_address or None,
+            "tls": sec.tls,
+            "supernode_auth": sec.tls and sec.supernode_auth,
+            "registered_nodes": dict(fed.node_ids) if fed else {},
             "processes": fed.alive() if fed else {},
             "pids": {n: p.pid for n, p in fed.procs.items()} if fed else {},
         }
@@ -159,28 +171,53 @@ class FederatedRunner:
         self._stop.set()
 
     def close(self) -> None:
-        """Stop the current run and every Flower process this runner started."""
+        """Stop the current run (recorded as `stopped`) and every Flower process this
+        runner started, a `flwr` call in flight included; returns within seconds."""
+        self._closing = True
         self._stop.set()
+        with self._lock:
+            fed, self.federation = self.federation, None
+        if fed is not None:
+            fed.stop()  # first: a run thread blocked on a `flwr` call returns at once
         if self._thread is not None:
-            self._thread.join(timeout=30)
-        if self.federation is not None:
-            self.federation.stop()
-            self.federation = None
+            self._thread.join(timeout=10)
+        if self._active is not None:
+            self._finish(self._active, "stopped", "the console stopped")
+            self._publish_run(self._active)
 
     def ensure_federation(self) -> LocalFederation:
-        """Start the local SuperLink and SuperNodes unless they are already up."""
-        fed = self.federation
-        if fed is not None and all(fed.alive().values()):
-            return fed
-        if fed is not None:
+        """Start the SuperLink (with the gateway and the local SuperNodes, as the
+        security settings say) unless it is already up; a local SuperNode that has ended
+        is started again.
+
+        Raises:
+            DeploymentError: a Flower process did not start; PKIError: a configured
+                certificate or key file cannot be used.
+        """
+        with self._lock:
+            if self._closing:
+                raise DeploymentError("the runner is closed")
+            fed = self.federation
+            if fed is not None and fed.core_alive():
+                fed.restart_dead_supernodes()
+                return fed
+            if fed is not None:
+                fed.stop()
+            drones: list[Drone] = []
+            if self.security.local_supernodes:
+                drones = self._drones or default_drones(
+                    self.defaults.num_drones, self.defaults.data, self.samples_db
+                )
+            fed_dir = self.workdir / "deployment"
+            shutil.rmtree(fed_dir, ignore_errors=True)
+            fed = LocalFederation(fed_dir, drones, security=self.security)
+            self.federation = fed
+        try:
+            fed.start()
+        except BaseException:
             fed.stop()
-        drones = self._drones or default_drones(
-            self.defaults.num_drones, self.defaults.data, self.samples_db
-        )
-        fed_dir = self.workdir / "deployment"
-        shutil.rmtree(fed_dir, ignore_errors=True)
-        self.federation = LocalFederation(fed_dir, drones).start()
-        return self.federation
+            raise
+        return fed
 
     # running -----------------------------------------------------------------------------
 
@@ -188,8 +225,11 @@ class FederatedRunner:
         try:
             target(cfg)
         except Exception as exc:
-            log.exception("federated run %s failed", cfg.run_id)
-            self._finish(cfg.run_id, "failed", f"{type(exc).__name__}: {exc}")
+            if self._closing:  # the console is stopping: its processes went first
+                self._finish(cfg.run_id, "stopped", "the console stopped")
+            else:
+                log.exception("federated run %s failed", cfg.run_id)
+                self._finish(cfg.run_id, "failed", f"{type(exc).__name__}: {exc}")
         finally:
             self._publish_run(cfg.run_id)
 
@@ -223,6 +263,9 @@ class FederatedRunner:
             if state[0] in FINISHED:
                 return
             if self._stop.is_set():
+                if self._closing:  # its processes are being ended: nothing to ask them
+                    self._finish(cfg.run_id, "stopped", "the console stopped")
+                    return
                 fed.stop_run(flwr_id)
                 self._finish(cfg.run_id, "stopped", "stopped by request")
                 return
@@ -241,12 +284,12 @@ class FederatedRunner:
                     return
             time.sleep(self.poll_s)
 
-    @staticmethod
-    def _flower_status(fed: LocalFederation, flwr_id: str) -> str:
+    def _flower_status(self, fed: LocalFederation, flwr_id: str) -> str:
         try:
             return str(fed.run_status(flwr_id).get("status", ""))
         except (DeploymentError, OSError) as exc:
-            log.warning("cannot read Flower's status of run %s: %s", flwr_id, exc)
+            if not self._closing:
+                log.warning("cannot read Flower's status of run %s: %s", flwr_id, exc)
             return ""
 
     # events ----------------------------------------------------------------------------------

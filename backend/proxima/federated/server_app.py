@@ -21,7 +21,7 @@ from flwr.serverapp import Grid, ServerApp
 from proxima.federated.config import FLConfig
 from proxima.federated.data import test_windows
 from proxima.federated.recorder import RunRecorder
-from proxima.federated.strategy import DronesMissing, guarded
+from proxima.federated.strategy import DronesMissing, GuardedMixin, guarded
 from proxima.federated.task import Scorer, new_model
 
 log = logging.getLogger(__name__)
@@ -49,6 +49,7 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
     initial = ArrayRecord(model.state_dict())
     scorer = Scorer(cfg, test_windows(cfg))
     strategy = guarded(cfg, recorder)
+    assert isinstance(strategy, GuardedMixin)  # a Flower strategy with the guard mixed in
     result = ServerResult(rounds=recorder.rounds)
     last: dict[str, Any] = {"arrays": initial}
 
@@ -69,7 +70,7 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
         return MetricRecord({"accuracy": acc, "loss": loss})
 
     recorder.status("running", f"{cfg.strategy}, {cfg.rounds} rounds")
-    train_config = ConfigRecord(cfg.to_run_config())  # drones build the same FLConfig
+    train_config = ConfigRecord(dict(cfg.to_run_config()))  # drones build the same FLConfig
     try:
         strategy.start(
             grid=grid,
@@ -77,7 +78,7 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
             num_rounds=cfg.rounds,
             timeout=cfg.round_timeout_s,
             train_config=train_config,
-            evaluate_config=ConfigRecord(cfg.to_run_config()),
+            evaluate_config=ConfigRecord(dict(cfg.to_run_config())),
             evaluate_fn=evaluate,
         )
     except DronesMissing as exc:

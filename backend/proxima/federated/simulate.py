@@ -110,7 +110,7 @@ def simulate(
             server_app=make_server_app(cfg, recorder, out),
             client_app=client_app,
             num_supernodes=cfg.num_drones,
-            backend_config=backend_config(cfg, cpus),  # type: ignore[arg-type]
+            backend_config=backend_config(cfg, cpus),
         )
     except BaseException as exc:
         recorder.status("failed", f"simulation engine: {type(exc).__name__}: {exc}")

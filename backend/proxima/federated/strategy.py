@@ -246,7 +246,7 @@ class GuardedMixin:
                 loss=_f(m.get("val_loss" if phase == "train" else "loss")),
                 accuracy=_f(m.get("val_accuracy" if phase == "train" else "accuracy")),
                 train_loss=_f(m.get("train_loss")),
-                samples=int(float(m["num-examples"])),
+                samples=int(_f(m["num-examples"]) or 0),
                 duration_s=_f(m.get("seconds")),
                 detail=_notes(msg),
             )

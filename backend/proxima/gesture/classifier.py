@@ -19,16 +19,17 @@ from proxima.gesture.features import Pipeline, make_pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import build_model, model_config
 from proxima.gesture.train import predict_proba
+from proxima.shipped import DEFAULT_CHECKPOINT, shipped_path
 from proxima.types import GESTURES
 
 FORMAT = "proxima-gesture/1"
-DEFAULT_NAME = "gesture-default.pt"
-MODELS_DIR = Path(__file__).resolve().parents[3] / "models"
+DEFAULT_NAME = Path(DEFAULT_CHECKPOINT).name
 
 
 def default_checkpoint() -> Path:
-    """The shipped default model, `models/gesture-default.pt` in the repository."""
-    return MODELS_DIR / DEFAULT_NAME
+    """The shipped default model: `models/gesture-default.pt` in a checkout, its copy
+    inside the package in an installed wheel (see `proxima.shipped`)."""
+    return shipped_path(DEFAULT_CHECKPOINT)
 
 
 def save_checkpoint(

@@ -66,7 +66,7 @@ def train(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from proxima.gesture.clip import DataError
-    from proxima.gesture.train import TrainConfig
+    from proxima.gesture.train import EpochLog, TrainConfig
     from proxima.gesture.workflow import train_model
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
@@ -87,7 +87,7 @@ def train(
                 f"{skipped} skipped (would span a gap of more than {max_gap} frames)"
             )
 
-        def on_epoch(log) -> None:  # type: ignore[no-untyped-def]
+        def on_epoch(log: EpochLog) -> None:
             text = f"loss {log.train_loss:.3f}"
             if not math.isnan(log.val_loss):  # the refit has no validation
                 text += f" val {log.val_loss:.3f} acc {log.val_accuracy:.3f}"

@@ -1,5 +1,6 @@
 """Where training data comes from: an explicit path, `PROXIMA_DATA`, the `../shared`
-copy beside the repository, or a verified download into the user cache.
+copy beside the repository (in a checkout) or beside the working directory, the user
+cache, or a verified download into the user cache (never with `PROXIMA_OFFLINE` set).
 
 Downloads use the data sets' pinned upstream commits and the SHA-256 list shipped with
 the package; files land in a temporary folder and are moved into place only when every
@@ -15,10 +16,11 @@ import tempfile
 import urllib.request
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import quote
 
 from proxima.gesture.clip import DataError
+from proxima.shipped import checkout_root, offline
 
-REPO_ROOT = Path(__file__).resolve().parents[3]
 _CHECKSUMS = Path(__file__).with_name("checksums")
 
 
@@ -54,11 +56,13 @@ def cache_dir() -> Path:
 
 
 def shared_dataset_dir(name: str) -> Path | None:
-    """The `../shared/datasets/<folder>` copy beside the repository (or the working
-    directory), if present."""
+    """The `../shared/datasets/<folder>` copy beside the repository (in a checkout) or
+    beside the working directory, if present."""
     info = DATASETS[name]
-    for root in (REPO_ROOT.parent, Path.cwd().parent):
-        candidate = root / "shared" / "datasets" / info.shared_dir
+    for root in (checkout_root(), Path.cwd()):
+        if root is None:
+            continue
+        candidate = root.parent / "shared" / "datasets" / info.shared_dir
         if candidate.is_dir():
             return candidate
     return None
@@ -106,7 +110,7 @@ def download_dataset(name: str, dest: Path | None = None, base_url: str | None =
             for rel, digest in table.items():
                 target = tmp / rel
                 target.parent.mkdir(parents=True, exist_ok=True)
-                url = base_url + urllib.request.quote(rel)
+                url = base_url + quote(rel)
                 try:
                     with urllib.request.urlopen(url, timeout=30) as r, target.open("wb") as f:
                         shutil.copyfileobj(r, f)
@@ -137,7 +141,8 @@ def resolve_dataset(spec: str | Path | None = None) -> Path:
 
     Raises:
         DataError: an explicit path that does not exist, a `synth:` folder that holds no
-            synthetic data set, or a failed download.
+            synthetic data set, a failed download, or no copy found while
+            `PROXIMA_OFFLINE` forbids the download.
     """
     spec = spec or os.environ.get("PROXIMA_DATA") or "laser"
     name = str(spec)
@@ -164,6 +169,12 @@ def resolve_dataset(spec: str | Path | None = None) -> Path:
     cached = cache_dir() / DATASETS[name].shared_dir
     if cached.is_dir():
         return cached
+    if offline():
+        raise DataError(
+            f"no {name} data set: none in ../shared/datasets beside the repository or the "
+            f"working directory, none at {cached}, and PROXIMA_OFFLINE forbids downloading "
+            "it; name a folder with --data or PROXIMA_DATA"
+        )
     return download_dataset(name)
 
 

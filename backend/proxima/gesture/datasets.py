@@ -44,7 +44,8 @@ def load_data(specs: Sequence[str | Path] | None = None) -> LoadedData:
     clips: list[Clip] = []
     folders: list[Path] = []
     uav_dir = None
-    for spec in specs or [None]:
+    chosen: Sequence[str | Path | None] = specs or (None,)
+    for spec in chosen:
         folder = resolve_dataset(spec)
         folders.append(folder)
         if is_uavgesture_dir(folder):

@@ -108,8 +108,12 @@ class BodyImagePipeline(BodyPipeline):
         return super().canonical(metric, np.zeros(len(metric), dtype=bool))
 
 
-PIPELINES = {"paper": PaperPipeline, "body": BodyPipeline, "body-image": BodyImagePipeline}
 Pipeline = PaperPipeline | BodyPipeline | BodyImagePipeline
+PIPELINES: dict[str, type[PaperPipeline] | type[BodyPipeline]] = {
+    "paper": PaperPipeline,
+    "body": BodyPipeline,
+    "body-image": BodyImagePipeline,
+}
 
 
 def make_pipeline(name: str, state: dict[str, Any] | None = None) -> Pipeline:

@@ -16,6 +16,7 @@ Both map (N, W, F) feature windows to (N, 13) logits; softmax is applied at infe
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import torch
 from torch import nn
@@ -113,5 +114,12 @@ def build_model(name: str, **config: object) -> nn.Module:
     return cls(cfg_cls(**config))
 
 
-def model_config(model: nn.Module) -> dict:
-    return asdict(model.cfg)  # type: ignore[arg-type]
+def model_config(model: nn.Module) -> dict[str, Any]:
+    """The config a model was built from (as `build_model` takes it back).
+
+    Raises:
+        TypeError: `model` is none of the models in `MODELS`.
+    """
+    if not isinstance(model, PaperLSTM | TCN):
+        raise TypeError(f"{type(model).__name__} is not a gesture model ({sorted(MODELS)})")
+    return asdict(model.cfg)

@@ -1,11 +1,12 @@
 """Find the MediaPipe pose model bundle (`.task`), downloading it only as a last resort.
 
-Order: an explicit path (`--pose-model`), then `models/*.task` in the repository, then
-the shared offline bundle `../shared/models/pose_landmarker_full.task` beside the
-repository, then the official bundle downloaded into the user cache. The download is
-pinned to a versioned URL and its SHA-256, shows a progress bar and is atomic: it is
-written to a temporary file in the cache directory and renamed only after the checksum
-matched, so a crash or a bad download never leaves a half-written model behind.
+Order: an explicit path (`--pose-model`, `[engine] pose_model`), then `models/*.task`
+and the shared offline bundle `../shared/models/pose_landmarker_full.task` beside the
+repository in a checkout, else beside the working directory, then the user cache, then
+the official bundle downloaded into the user cache (never with `PROXIMA_OFFLINE` set).
+The download is pinned to a versioned URL and its SHA-256, shows a progress bar and is
+atomic: it is written to a temporary file in the cache directory and renamed only after
+the checksum matched, so a crash or a bad download never leaves a half-written model.
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ import tempfile
 import urllib.request
 from pathlib import Path
 
+from proxima.shipped import checkout_root, offline
+
 # The official "full" bundle, version 1 (a versioned URL, unlike `latest`, never changes,
 # so its checksum can be pinned).
 OFFICIAL_MODEL_URL = (
@@ -24,8 +27,6 @@ OFFICIAL_MODEL_URL = (
 )
 OFFICIAL_MODEL_SHA256 = "5134a3aad27a58b93da0088d431f366da362b44e3ccfbe3462b3827a839011b1"
 MODEL_FILENAME = "pose_landmarker_full.task"
-
-REPO_ROOT = Path(__file__).resolve().parents[3]
 
 
 class PoseModelError(RuntimeError):
@@ -121,9 +122,11 @@ def resolve_pose_model(
     path: str | Path | None = None,
     *,
     repo_root: Path | None = None,
-    download: bool = True,
+    download: bool | None = None,
 ) -> Path:
-    """Return the pose model to use (see the module docstring for the order).
+    """Return the pose model to use (see the module docstring for the order). `repo_root`
+    replaces the checkout or working directory searched; `download` defaults to on
+    unless `PROXIMA_OFFLINE` is set.
 
     Raises:
         PoseModelError: `path` is given but missing, or nothing is found and the
@@ -134,7 +137,7 @@ def resolve_pose_model(
         if not p.is_file():
             raise PoseModelError(f"pose model {p} does not exist")
         return p
-    root = repo_root or REPO_ROOT
+    root = repo_root or checkout_root() or Path.cwd()
     found = _repo_model(root)
     if found is not None:
         return found
@@ -144,7 +147,13 @@ def resolve_pose_model(
     cached = cache_dir() / MODEL_FILENAME
     if cached.is_file():
         return cached
-    if not download:
+    if download is None and offline():
+        raise PoseModelError(
+            f"no pose model: none given, none in {root / 'models'}, none at {shared} or "
+            f"{cached}, and PROXIMA_OFFLINE forbids downloading it; name one with "
+            "--pose-model or [engine] pose_model"
+        )
+    if download is False:
         raise PoseModelError(
             f"no pose model: none given, none in {root / 'models'}, none at {shared} or "
             f"{cached}, and downloading is off"

@@ -69,7 +69,7 @@ def _run(kind: str, build: Any, json_out: Path, title: str, checkpoint: Path | N
 def paper_flight(
     json_out: Annotated[Path, typer.Option("--json", help="write the result here (+ .png)")],
     checkpoint: Annotated[
-        Path | None, typer.Option(help="gesture model (default: models/gesture-default.pt)")
+        Path | None, typer.Option(help="gesture model (default: the shipped gesture-default.pt)")
     ] = None,
     data: Annotated[str | None, typer.Option(help="LASER data folder")] = None,
     seed: Annotated[
@@ -104,7 +104,7 @@ def paper_flight(
 def sim_two_drones(
     json_out: Annotated[Path, typer.Option("--json", help="write the result here (+ .png)")],
     checkpoint: Annotated[
-        Path | None, typer.Option(help="gesture model (default: models/gesture-default.pt)")
+        Path | None, typer.Option(help="gesture model (default: the shipped gesture-default.pt)")
     ] = None,
     data: Annotated[str | None, typer.Option(help="LASER data folder")] = None,
     seed: Annotated[int, typer.Option(help="clip offsets of the stitched streams")] = 0,

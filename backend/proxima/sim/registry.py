@@ -17,6 +17,7 @@ from typing import Any
 
 from proxima.drone.link import Telemetry
 from proxima.ingest.base import SourceError
+from proxima.shipped import shipped_path
 from proxima.sim.config import (
     DEFAULT_BYSTANDERS,
     OperatorConfig,
@@ -132,6 +133,10 @@ def _config(uri: SimUri) -> tuple[str, SceneConfig]:
             f"{uri.uri}: no scene {uri.scene!r}: use {BUILTIN}, a scene file (.toml) or the "
             "name of a registered scene"
         )
+    if not path.is_absolute() and not path.exists():
+        # A shipped scene (config/scenes/...), as an installed wheel carries it.
+        shipped = shipped_path(uri.scene)
+        path = shipped if shipped.is_file() else path
     try:
         return str(path.resolve()), load_scene_config(path)
     except SceneFileError as exc:

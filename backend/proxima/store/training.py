@@ -116,7 +116,8 @@ class TrainingStore:
         self.engine = (
             engine_or_path if isinstance(engine_or_path, Engine) else make_engine(engine_or_path)
         )
-        Base.metadata.create_all(self.engine, tables=[t.__table__ for t in self.TABLES])  # type: ignore[attr-defined]
+        tables = [Base.metadata.tables[t.__tablename__] for t in self.TABLES]
+        Base.metadata.create_all(self.engine, tables=tables)
         self._session = make_sessionmaker(self.engine)
         self._lock = threading.Lock()
 

@@ -17,7 +17,12 @@ from typing import Any
 from proxima.drone.link import CommandResult, DroneLink, Telemetry
 from proxima.drone.mavlink.autopilot import Autopilot
 from proxima.drone.mavlink.config import LinkConfig
-from proxima.drone.mavlink.protocol import FORCE_DISARM_MAGIC, command_name, mav
+from proxima.drone.mavlink.protocol import (
+    FORCE_DISARM_MAGIC,
+    ZERO_PADDED_COMMANDS,
+    command_name,
+    mav,
+)
 from proxima.drone.mavlink.setpoint import Setpoint
 from proxima.types import LinkState
 
@@ -114,8 +119,10 @@ class MavlinkActions(DroneLink):
         retries: int | None = None,
     ) -> CommandResult:
         """Send COMMAND_LONG and wait for its COMMAND_ACK, resending (with an increasing
-        `confirmation`) after each `timeout` up to `retries` times."""
-        p = [float(x) for x in params] + [0.0] * (7 - len(params))
+        `confirmation`) after each `timeout` up to `retries` times. Params not given are
+        sent as the autopilot expects an unused one (`Autopilot.unused_param`)."""
+        pad = 0.0 if command in ZERO_PADDED_COMMANDS else self._policy().unused_param
+        p = [float(x) for x in params] + [pad] * (7 - len(params))
         sent = {"msg": "COMMAND_LONG", "command": command_name(command), "params": p}
         refusal = self._refusal(action, sent)
         if refusal is not None:
@@ -194,6 +201,8 @@ class MavlinkActions(DroneLink):
         return result
 
     def takeoff(self, altitude_m: float) -> CommandResult:
+        if not (math.isfinite(altitude_m) and altitude_m > 0):
+            return _invalid("takeoff", f"altitude must be a positive number, got {altitude_m}")
         tel = self.telemetry()
         if tel is None:
             return CommandResult("takeoff", "not_connected", False)
@@ -207,6 +216,10 @@ class MavlinkActions(DroneLink):
                 detail=f"{policy.label} takeoff needs the home altitude",
             )
         steps = [self.enter_guided, self.arm] if policy.takeoff_in_guided else [self.arm]
+        if policy.hold_mode is not None and tel.mode not in policy.holding_modes:
+            # PX4 arms from its holding modes only (as MAVSDK does: Hold before arming
+            # after a landing or an RTL).
+            steps.insert(0, lambda: self.set_mode(str(policy.hold_mode)))
         for step in steps:
             result = step()
             if not result.ok:
@@ -227,6 +240,8 @@ class MavlinkActions(DroneLink):
     def goto_local(
         self, north: float, east: float, down: float, yaw: float | None = None
     ) -> CommandResult:
+        if not all(math.isfinite(v) for v in (north, east, down, 0.0 if yaw is None else yaw)):
+            return _invalid("goto", f"target ({north}, {east}, {down}, yaw {yaw}) not finite")
         sent = {
             "msg": "SET_POSITION_TARGET_LOCAL_NED",
             "frame": "LOCAL_NED",
@@ -300,6 +315,8 @@ class MavlinkActions(DroneLink):
         )
 
     def change_speed(self, speed_m_s: float) -> CommandResult:
+        if not (math.isfinite(speed_m_s) and speed_m_s > 0):
+            return _invalid("change_speed", f"speed must be a positive number, got {speed_m_s}")
         return self.command_long("change_speed", mav.MAV_CMD_DO_CHANGE_SPEED, [1, speed_m_s, -1])
 
     def land(self) -> CommandResult:
@@ -307,6 +324,11 @@ class MavlinkActions(DroneLink):
         return self.command_long(
             "land", mav.MAV_CMD_NAV_LAND, [0, 0, 0, math.nan, math.nan, math.nan, 0]
         )
+
+
+def _invalid(action: str, detail: str) -> CommandResult:
+    """A command refused before sending: its arguments cannot be flown."""
+    return CommandResult(action, "invalid", False, detail=f"{detail}; nothing sent")
 
 
 def _stopping_point(tel: Telemetry, accel: float) -> tuple[float, float, float]:

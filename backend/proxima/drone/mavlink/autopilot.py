@@ -35,6 +35,9 @@ class Autopilot(ABC):
     # target at the stopping point in `guided_mode`, or `brake_mode` without a position.
     hold_mode: str | None
     brake_mode: str
+    # What an empty COMMAND_LONG param is sent as (MAVSDK's convention: 0 to ArduPilot,
+    # NaN to PX4, where NaN is MAVLink's "unset").
+    unused_param: float
 
     @abstractmethod
     def mode_params(self, mode: str, vehicle_type: int) -> list[float] | None:
@@ -62,6 +65,7 @@ class ArduPilot(Autopilot):
     takeoff_in_guided = True
     hold_mode = None
     brake_mode = "BRAKE"
+    unused_param = 0.0
 
     def mode_params(self, mode: str, vehicle_type: int) -> list[float] | None:
         mapping = mavutil.mode_mapping_byname(vehicle_type) or {}
@@ -85,6 +89,7 @@ class PX4(Autopilot):
     takeoff_in_guided = False
     hold_mode = "LOITER"
     brake_mode = "LOITER"
+    unused_param = math.nan
 
     def mode_params(self, mode: str, vehicle_type: int) -> list[float] | None:
         if mode not in PX4_MODES:

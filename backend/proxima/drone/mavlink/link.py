@@ -81,6 +81,16 @@ class MavlinkLink(MavlinkActions):
         """Messages sent by type, heartbeats not counted."""
         return self._io.sent_counts
 
+    @property
+    def running(self) -> bool:
+        """Whether the link's owner thread is running (from `connect()` to `close()`)."""
+        return self._io.running
+
+    @property
+    def faults(self) -> Counter[str]:
+        """What arrived unusable: BAD_DATA, decode_error (logged), reopened."""
+        return self._io.faults
+
     def sent_count(self) -> int:
         """How many messages other than heartbeats this link has sent."""
         return sum(self._io.sent_counts.values())

@@ -33,6 +33,7 @@ __all__ = [
     "PX4_MODES",
     "RESULTS",
     "STREAMED",
+    "ZERO_PADDED_COMMANDS",
     "command_name",
     "mav",
     "mavutil",
@@ -130,6 +131,19 @@ STREAMED = (
     mav.MAVLINK_MSG_ID_SYS_STATUS,
     mav.MAVLINK_MSG_ID_EXTENDED_SYS_STATE,
     mav.MAVLINK_MSG_ID_POSITION_TARGET_LOCAL_NED,
+)
+
+
+# Commands whose unused params common.xml documents as 0 (reserved default 0, "assumed
+# not used (0)"): the link pads them with 0 whatever the autopilot's habit for empty
+# params (`Autopilot.unused_param`).
+ZERO_PADDED_COMMANDS = frozenset(
+    {
+        mav.MAV_CMD_DO_CHANGE_SPEED,
+        mav.MAV_CMD_SET_MESSAGE_INTERVAL,
+        mav.MAV_CMD_GET_MESSAGE_INTERVAL,
+        mav.MAV_CMD_REQUEST_MESSAGE,
+    }
 )
 
 

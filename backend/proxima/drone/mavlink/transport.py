@@ -16,11 +16,13 @@ serial device `/dev/ttyUSB0,57600`.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import queue
 import select
 import threading
 import time
+import traceback
 from collections import Counter
 from collections.abc import Callable
 from concurrent.futures import Future
@@ -33,6 +35,8 @@ from proxima.drone.mavlink.protocol import NOT_VEHICLES, STREAMED, mav, mavutil
 from proxima.drone.mavlink.setpoint import Setpoint
 from proxima.drone.mavlink.telemetry import TelemetryStore
 from proxima.types import LinkState
+
+log = logging.getLogger(__name__)
 
 Op = Callable[[Any], None]  # work for the owner thread, given the open connection
 
@@ -64,6 +68,10 @@ class MavlinkTransport:
         self.open_error = ""
         self.target: tuple[int, int] | None = None  # the vehicle: (system, component)
         self.sent_counts: Counter[str] = Counter()  # every message type sent but heartbeats
+        # What arrived that could not be used: BAD_DATA (bytes that are not MAVLink),
+        # decode_error (a message the decoder choked on: a bug, logged), reopened (the
+        # connection failed and was opened again).
+        self.faults: Counter[str] = Counter()
         self.setpoint: Setpoint | None = None  # the streamed target (owner thread only)
         self._ops: queue.SimpleQueue[Op] = queue.SimpleQueue()
         self._wake_r, self._wake_w = os.pipe()
@@ -78,6 +86,10 @@ class MavlinkTransport:
     @property
     def closed(self) -> bool:
         return self._stop.is_set()
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
 
     def start(self) -> None:
         """Start the owner thread (once)."""
@@ -185,6 +197,7 @@ class MavlinkTransport:
                 self._sleep(conn, max(0.0, min(wait, 0.05)))
             except Exception as exc:  # a broken connection: reopen it
                 self.open_error = f"{type(exc).__name__}: {exc}"
+                self.faults["reopened"] += 1
                 self._close_conn()
                 self._stop.wait(backoff)
         self._close_conn()
@@ -213,14 +226,26 @@ class MavlinkTransport:
 
     def _drain(self, conn: Any) -> None:
         for _ in range(500):
-            msg = conn.recv_msg()
+            try:
+                msg = conn.recv_msg()
+            except OSError:
+                raise  # the connection itself broke: reopen it (`_run`)
+            except Exception:  # hostile bytes pymavlink did not turn into BAD_DATA
+                self.faults["decode_error"] += 1
+                log.warning("%s: undecodable message\n%s", self.name, traceback.format_exc())
+                continue
             if msg is None:
                 return
-            self._on_message(msg)
+            try:
+                self._on_message(msg)
+            except Exception:  # a message we could not fold in: a bug; keep the link
+                self.faults["decode_error"] += 1
+                log.warning("%s: message %s not decoded", self.name, msg, exc_info=True)
 
     def _on_message(self, msg: Any) -> None:
         kind = msg.get_type()
         if kind == "BAD_DATA":
+            self.faults["BAD_DATA"] += 1
             return
         src = msg.get_srcSystem()
         now = time.monotonic()

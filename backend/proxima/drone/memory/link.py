@@ -28,7 +28,7 @@ from proxima.drone.mavlink.protocol import LANDED_STATES, RESULTS, mav
 from proxima.drone.mavlink.setpoint import Setpoint
 from proxima.drone.memory.clock import Clock, WallClock
 from proxima.drone.sim.config import SimConfig
-from proxima.drone.sim.handlers import vehicle_command
+from proxima.drone.sim.handlers import Command, vehicle_command
 from proxima.drone.sim.vehicle import Vehicle
 from proxima.types import LinkState
 
@@ -158,7 +158,7 @@ class MemoryLink(MavlinkActions):
             self._advance()
             t0 = time.perf_counter()
             self._record(sent)
-            result = vehicle_command(self._vehicle, command, params)
+            result = vehicle_command(self._vehicle, Command.of(command, params))
             latency = time.perf_counter() - t0
         if result is None:  # telemetry is read from the vehicle itself: no rates to set
             return CommandResult(

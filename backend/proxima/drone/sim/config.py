@@ -8,7 +8,8 @@ from dataclasses import dataclass
 @dataclass
 class SimConfig:
     """One simulated vehicle: where it sends MAVLink, who it is, how it flies. Defaults
-    are ArduCopter-like."""
+    are ArduCopter-like. The flight limits are the defaults of the autopilot's
+    parameters (`param_sets`): a PARAM_SET changes them while it flies."""
 
     port: int = 14550  # where the ground station listens
     out_ports: tuple[int, ...] = ()  # further ground stations (like SITL's extra --out)
@@ -17,10 +18,11 @@ class SimConfig:
     autopilot: str = "ardupilot"  # "ardupilot" or "px4"
     rate_hz: float = 10.0  # default telemetry rate
     physics_hz: float = 50.0
-    max_speed: float = 5.0  # horizontal m/s (WPNAV_SPEED)
+    max_speed: float = 5.0  # horizontal m/s (WPNAV_SPEED, MPC_XY_CRUISE)
     max_climb: float = 2.5  # m/s
     max_descent: float = 1.5  # m/s
     max_accel: float = 2.5  # m/s^2, horizontal and vertical
+    takeoff_alt: float = 2.5  # m: NAV_TAKEOFF with a NaN altitude (MIS_TAKEOFF_ALT)
     position_gain: float = 3.0  # 1/s, final approach of the position controller
     land_speed: float = 0.5  # m/s in LAND
     rtl_altitude: float = 15.0  # m

@@ -2,8 +2,9 @@
 
 The vehicle's physics and state machine (`vehicle.Vehicle`) are shared; a `Firmware`
 says which modes exist and how they are numbered, which hold position, from which the
-motors may be armed, how NAV_TAKEOFF's altitude is read, and the OFFBOARD rules. The PX4
-one is this project's model of PX4's documented behaviour, not PX4 itself.
+motors may be armed, how NAV_TAKEOFF's altitude is read, the OFFBOARD rules, its
+parameter set (`param_sets`) and what AUTOPILOT_VERSION says. The PX4 one is this
+project's model of PX4's documented behaviour, not PX4 itself.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from proxima.drone.mavlink.protocol import (
     px4_custom_mode,
     px4_main_sub,
 )
+from proxima.drone.sim.param_sets import PARAM_SETS, ParamSet
 
 
 class Firmware(ABC):
@@ -36,17 +38,23 @@ class Firmware(ABC):
     takeoff_mode: str | None  # the mode NAV_TAKEOFF switches to, if any ...
     after_takeoff_mode: str | None  # ... and the one it leaves it for at altitude
     setpoint_takes_off: bool  # a guided target above the ground takes off (else ignored)
-    # The guided mode needs a setpoint stream: entered only while one runs, left for
-    # `stream_loss_mode` when it stops for `offboard_loss_s`.
+    # The guided mode needs a setpoint stream: entered only while setpoints arrive, left
+    # by the offboard-loss rule (`ParamSet.offboard_loss`) when they stop.
     needs_setpoint_stream: bool
-    stream_loss_mode: str
+    hold_mode: str  # where a "hold" failsafe action goes (ArduCopter BRAKE, PX4 Hold)
+    reposition_mode: str  # DO_REPOSITION flies there (ArduCopter GUIDED, PX4 Hold)
+    reposition_yaw: bool  # DO_REPOSITION's param 4 sets the yaw (PX4; ArduCopter ignores it)
+    guided_mission_item: bool  # MISSION_ITEM_INT current=2 is a "fly to" (ArduPilot)
+    mission_home_item: bool  # mission item 0 is the home position (ArduPilot)
+    params: ParamSet
+    flight_sw_version: tuple[int, int, int]  # AUTOPILOT_VERSION: the behaviour modelled
 
     @abstractmethod
     def custom_mode(self, mode: str) -> int:
         """HEARTBEAT.custom_mode of `mode`."""
 
     @abstractmethod
-    def mode_from_params(self, custom_main: float, custom_sub: float) -> str | None:
+    def mode_from_params(self, custom_main: int, custom_sub: int) -> str | None:
         """The mode a DO_SET_MODE (params 2 and 3) asks for, None if not flown here."""
 
     @abstractmethod
@@ -55,7 +63,7 @@ class Firmware(ABC):
 
     @abstractmethod
     def takeoff_altitude(self, param7: float, home_amsl: float) -> float:
-        """NAV_TAKEOFF param 7 as metres above home."""
+        """A finite NAV_TAKEOFF param 7 as metres above home."""
 
 
 class ArduCopter(Firmware):
@@ -75,14 +83,20 @@ class ArduCopter(Firmware):
     after_takeoff_mode = None
     setpoint_takes_off = False
     needs_setpoint_stream = False
-    stream_loss_mode = "LOITER"
+    hold_mode = "BRAKE"
+    reposition_mode = "GUIDED"
+    reposition_yaw = False
+    guided_mission_item = True
+    mission_home_item = True
+    params = PARAM_SETS["ardupilot"]
+    flight_sw_version = (4, 5, 0)
 
     def custom_mode(self, mode: str) -> int:
         return ARDUCOPTER_MODES[mode]
 
-    def mode_from_params(self, custom_main: float, custom_sub: float) -> str | None:
+    def mode_from_params(self, custom_main: int, custom_sub: int) -> str | None:
         for name in self.modes:
-            if ARDUCOPTER_MODES[name] == int(custom_main):
+            if ARDUCOPTER_MODES[name] == custom_main:
                 return name
         return None
 
@@ -90,7 +104,7 @@ class ArduCopter(Firmware):
         return self.mode_from_params(custom_mode, 0)
 
     def takeoff_altitude(self, param7: float, home_amsl: float) -> float:
-        return param7
+        return param7  # above home
 
 
 class PX4(Firmware):
@@ -110,14 +124,20 @@ class PX4(Firmware):
     after_takeoff_mode = "LOITER"
     setpoint_takes_off = True
     needs_setpoint_stream = True
-    stream_loss_mode = "LOITER"
+    hold_mode = "LOITER"
+    reposition_mode = "LOITER"
+    reposition_yaw = True
+    guided_mission_item = False
+    mission_home_item = False
+    params = PARAM_SETS["px4"]
+    flight_sw_version = (1, 15, 0)
 
     def custom_mode(self, mode: str) -> int:
         _, main, sub = PX4_MODES[mode]
         return px4_custom_mode(main, sub)
 
-    def mode_from_params(self, custom_main: float, custom_sub: float) -> str | None:
-        want = (int(custom_main), int(custom_sub))
+    def mode_from_params(self, custom_main: int, custom_sub: int) -> str | None:
+        want = (custom_main, custom_sub)
         for name in self.modes:
             code = PX4_MODES[name][1:]
             # AUTO modes are told apart by their sub mode; the others by the main mode.
@@ -129,7 +149,7 @@ class PX4(Firmware):
         return self.mode_from_params(*px4_main_sub(custom_mode))
 
     def takeoff_altitude(self, param7: float, home_amsl: float) -> float:
-        return param7 - home_amsl
+        return param7 - home_amsl  # PX4 sends AMSL
 
 
 FIRMWARES: dict[str, Firmware] = {f.name: f for f in (ArduCopter(), PX4())}

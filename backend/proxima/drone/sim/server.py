@@ -1,10 +1,17 @@
 """The simulated vehicle's MAVLink side: UDP the way ArduCopter SITL speaks it.
 
 It sends MAVLink 2 to a ground station at HOST:PORT (so the station listens with
-`udpin:127.0.0.1:PORT`) and to every address it hears from, decodes what arrives
-(COMMAND_LONG, COMMAND_INT, SET_MODE, SET_POSITION_TARGET_LOCAL_NED) into calls on the
-`Vehicle` and answers every command with a COMMAND_ACK. `run(stop)` owns the socket and
-the clock: it steps the physics at `physics_hz` and streams the telemetry.
+`udpin:127.0.0.1:PORT`) and to every address it hears from, decodes what arrives and
+hands each message to the service that owns it: the vehicle's commands (`handlers`),
+telemetry and message requests (`telemetry`), parameters (`params`), missions
+(`mission`), MAVLink FTP (`ftp`). Every command gets a COMMAND_ACK (UNSUPPORTED for one
+nobody handles). `run(stop)` owns the socket and the clock: it steps the physics at
+`physics_hz`, streams the telemetry and lets each service do its timed work.
+
+Nothing that arrives is trusted: a datagram that does not parse is dropped whole (and
+the parser starts afresh), a message for another system or component is ignored, and a
+handler that raises is counted in `handler_errors` and logged to stderr rather than
+stopping the vehicle (the fuzz test requires that count to stay 0).
 """
 
 from __future__ import annotations
@@ -13,19 +20,43 @@ import contextlib
 import random
 import select
 import socket
+import sys
 import threading
 import time
-from collections.abc import Callable
+import traceback
+from collections import Counter
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
+from proxima.drone.mavlink.fields import degrees_e7
 from proxima.drone.mavlink.protocol import mav
 from proxima.drone.sim.config import SimConfig
-from proxima.drone.sim.handlers import set_mode_message, vehicle_command
+from proxima.drone.sim.ftp import FtpService
+from proxima.drone.sim.handlers import (
+    Command,
+    global_position_target,
+    set_mode_message,
+    vehicle_command,
+)
+from proxima.drone.sim.mission import MissionService
+from proxima.drone.sim.params import ParamService
 from proxima.drone.sim.telemetry import TelemetryStreams
 from proxima.drone.sim.vehicle import Vehicle
 
 PEER_TIMEOUT_S = 10.0  # stop sending to an address not heard from for this long
+AUTOPILOT_COMPONENTS = (0, mav.MAV_COMP_ID_AUTOPILOT1)  # target_component we answer to
+
+MessageHandler = Callable[[Any], None]
+
+
+class Service(Protocol):
+    """A part of the vehicle's MAVLink side: the messages it handles and its timed work."""
+
+    @property
+    def messages(self) -> Mapping[str, MessageHandler]: ...
+
+    def tick(self, now: float) -> None: ...
 
 
 @dataclass
@@ -51,15 +82,35 @@ class VehicleServer:
         self.peers: dict[tuple[str, int], _Peer] = {}
         self.rng = random.Random(config.seed)
         self.mav = mav.MAVLink(self, srcSystem=config.sysid, srcComponent=1)
+        self.parser = self._new_parser()
         self.telemetry = TelemetryStreams(self.vehicle, self.mav, config.rate_hz, config.physics_hz)
+        self.services: list[Service] = [
+            self.telemetry,
+            ParamService(self.vehicle.params, self.mav, self._statustext),
+            MissionService(self.vehicle, self.mav, time.monotonic),
+            FtpService(self.mav, config.sysid),
+        ]
         self.packets_in = 0
         self.packets_dropped = 0
-        self._messages: dict[str, Callable[[Any], None]] = {
+        self.bad_datagrams = 0  # did not parse as MAVLink
+        self.handler_errors = 0  # a handler raised: a bug, logged to stderr
+        self.handled: Counter[str] = Counter()  # messages given to a handler, by type
+        self.messages: dict[str, MessageHandler] = {
+            "HEARTBEAT": self._heartbeat,
             "COMMAND_LONG": self._command_long,
             "COMMAND_INT": self._command_int,
             "SET_MODE": self._set_mode,
             "SET_POSITION_TARGET_LOCAL_NED": self._position_target,
+            "SET_POSITION_TARGET_GLOBAL_INT": self._global_target,
         }
+        for service in self.services:
+            self.messages.update(service.messages)
+        self.commands: dict[int, Callable[[Command], int]] = dict(self.telemetry.commands)
+
+    def _new_parser(self) -> Any:
+        parser = mav.MAVLink(None, srcSystem=self.cfg.sysid, srcComponent=1)
+        parser.robust_parsing = True  # bad bytes become BAD_DATA, not exceptions
+        return parser
 
     # --- transport -------------------------------------------------------------------
     def write(self, buf: bytes) -> None:
@@ -89,12 +140,22 @@ class VehicleServer:
                 self.peers[addr] = _Peer(addr)
             else:
                 peer.last_heard = time.monotonic()
-            try:
-                msgs = self.mav.parse_buffer(data) or []
-            except mav.MAVError:
-                continue
-            for msg in msgs:
+            for msg in self._parse(data):
                 self._handle(msg)
+
+    def _parse(self, data: bytes) -> list[Any]:
+        """The messages of one datagram. A datagram is whole or nothing: bytes left over
+        (a truncated packet) would otherwise swallow the start of the next datagram, so
+        the parser starts afresh after a broken one."""
+        try:
+            msgs = self.parser.parse_buffer(data) or []
+        except Exception:  # pymavlink raises more than MAVError on hostile bytes
+            msgs = None
+        good = [m for m in msgs or () if m.get_type() != "BAD_DATA"]
+        if msgs is None or len(good) < len(msgs) or self.parser.buf_len():
+            self.bad_datagrams += 1
+            self.parser = self._new_parser()
+        return good
 
     def run(self, stop: threading.Event) -> None:
         """Fly until `stop` is set: receive, step physics at `physics_hz`, stream."""
@@ -109,7 +170,8 @@ class VehicleServer:
                 now = time.monotonic()
                 if now >= next_tick:
                     self.vehicle.step(dt)
-                    self.telemetry.stream(now)
+                    for service in self.services:
+                        self._guarded(service.tick, now)
                     next_tick += dt
                     if now - next_tick > 1.0:  # we were suspended: do not replay the past
                         next_tick = now + dt
@@ -121,27 +183,43 @@ class VehicleServer:
 
     # --- incoming messages -----------------------------------------------------------
     def _handle(self, msg: Any) -> None:
-        target = getattr(msg, "target_system", None)
-        if target not in (None, 0, self.cfg.sysid):
+        if getattr(msg, "target_system", 0) not in (0, self.cfg.sysid):
             return
-        handler = self._messages.get(msg.get_type())
+        if getattr(msg, "target_component", 0) not in AUTOPILOT_COMPONENTS:
+            return  # for a camera, a gimbal, ... of this system: not ours
+        handler = self.messages.get(msg.get_type())
         if handler is not None:
-            handler(msg)
+            self.handled[msg.get_type()] += 1
+            self._guarded(handler, msg)
+
+    def _guarded(self, fn: Callable[[Any], None], arg: Any) -> None:
+        try:
+            fn(arg)
+        except Exception:  # a bug: keep flying, count it, say where
+            self.handler_errors += 1
+            print(f"sim-drone: handler error\n{traceback.format_exc()}", file=sys.stderr)
+
+    def _heartbeat(self, msg: Any) -> None:
+        if msg.type == mav.MAV_TYPE_GCS:
+            self.vehicle.gcs_heard()
 
     def _command_long(self, msg: Any) -> None:
         params = [msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6]
-        self._command(msg.command, [*params, msg.param7], msg)
+        self._command(Command.of(msg.command, [*params, msg.param7]), msg)
 
     def _command_int(self, msg: Any) -> None:
-        params = [msg.param1, msg.param2, msg.param3, msg.param4, msg.x / 1e7, msg.y / 1e7]
-        self._command(msg.command, [*params, msg.z], msg)
+        params = [msg.param1, msg.param2, msg.param3, msg.param4]
+        params += [degrees_e7(msg.x), degrees_e7(msg.y), msg.z]
+        self._command(Command.of(msg.command, params, msg.frame), msg)
 
-    def _command(self, command: int, params: list[float], msg: Any) -> None:
-        if self.telemetry.handles(command):
-            result: int | None = self.telemetry.command(command, params)
+    def _command(self, command: Command, msg: Any) -> None:
+        handler = self.commands.get(command.id)
+        if handler is not None:
+            result: int | None = handler(command)
         else:
-            result = vehicle_command(self.vehicle, command, params)
-        self._ack(command, mav.MAV_RESULT_UNSUPPORTED if result is None else result, msg)
+            result = vehicle_command(self.vehicle, command)
+        self._ack(command.id, mav.MAV_RESULT_UNSUPPORTED if result is None else result, msg)
+        self.telemetry.send_requested()
 
     def _set_mode(self, msg: Any) -> None:
         result = set_mode_message(self.vehicle, msg.base_mode, msg.custom_mode)
@@ -152,6 +230,17 @@ class VehicleServer:
             msg.coordinate_frame,
             msg.type_mask,
             (msg.x, msg.y, msg.z),
+            (msg.vx, msg.vy, msg.vz),
+            msg.yaw,
+        )
+
+    def _global_target(self, msg: Any) -> None:
+        global_position_target(
+            self.vehicle,
+            msg.coordinate_frame,
+            msg.type_mask,
+            (msg.lat_int, msg.lon_int),
+            msg.alt,
             (msg.vx, msg.vy, msg.vz),
             msg.yaw,
         )

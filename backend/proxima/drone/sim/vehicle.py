@@ -1,10 +1,14 @@
 """The simulated multicopter itself: its state machine and physics, no I/O.
 
 A point mass flown with speed and acceleration limits, with the modes, arming rules,
-takeoff, landing, RTL, battery and failsafes of an ArduCopter- or PX4-like vehicle (the
-`firmware.Firmware` decides which). Commands come in as method calls that answer with a
-MAV_RESULT; time comes from `clock` (monotonic seconds), so the MAVLink server runs it
-at real time and the in-memory link on its own clock. It is not an aerodynamic model.
+takeoff, landing, RTL, battery, geofence and failsafes of an ArduCopter- or PX4-like
+vehicle (the `firmware.Firmware` decides which). Its limits are its parameters
+(`params`, the autopilot's own names), read again whenever one changes. Commands come in
+as method calls that answer with a MAV_RESULT and were checked by their caller
+(`handlers`): a method here still refuses what it cannot fly (a non-finite number, a
+target outside the simulated world). Time comes from `clock` (monotonic seconds), so
+the MAVLink server runs it at real time and the in-memory link on its own clock. It is
+not an aerodynamic model.
 """
 
 from __future__ import annotations
@@ -13,12 +17,18 @@ import math
 import time
 from collections.abc import Callable
 
+from proxima.drone.mavlink.fields import finite
 from proxima.drone.mavlink.protocol import IGNORE_POSITION, IGNORE_VELOCITY, IGNORE_YAW, mav
+from proxima.drone.sim import failsafe
 from proxima.drone.sim.config import SimConfig
 from proxima.drone.sim.firmware import Firmware, firmware_for
+from proxima.drone.sim.geo import global_from_local, local_from_global
+from proxima.drone.sim.mission import MissionStore
+from proxima.drone.sim.param_sets import Limits
 
 GRAVITY = 9.81
-EARTH_RADIUS_M = 6_378_137.0
+WORLD_RADIUS_M = 100_000.0  # targets farther from home than this are refused
+WORLD_CEILING_M = 10_000.0  # ... and higher or deeper than this
 
 TextSink = Callable[[str, int], None]  # (text, MAV_SEVERITY)
 
@@ -38,6 +48,9 @@ class Vehicle:
         self.fw: Firmware = firmware_for(config.autopilot)
         self.clock = clock
         self.on_text = on_text
+        self.params = self.fw.params.store(config)
+        self._limits: tuple[int, Limits] | None = None
+        self.missions = MissionStore()
         self.pos = [0.0, 0.0, 0.0]
         self.vel = [0.0, 0.0, 0.0]
         self.acc = [0.0, 0.0, 0.0]
@@ -50,19 +63,45 @@ class Vehicle:
         self.target: list[float] | None = None  # position target (NED)
         self.target_mask = 0
         self.vel_target: list[float] | None = None
-        self.speed = config.max_speed
-        self.climb = config.max_climb
-        self.descent = config.max_descent
+        self.land_point: tuple[float, float] | None = None  # LAND flies here first
+        self.speed_override: float | None = None  # DO_CHANGE_SPEED, below the cruise
+        self.climb_override: float | None = None
+        self.descent_override: float | None = None
         self.battery = config.battery_pct
         self.armed_on_ground_since: float | None = None
         self.touchdown_since: float | None = None
         self.rtl_phase = ""
-        self.setpoint_times: list[float] = []
+        self.last_setpoint_at: float | None = None
+        self.gcs_heard_at: float | None = None  # the newest ground-station heartbeat
+        self.failsafes = failsafe.FailsafeState()
 
     # --- what it reports ---------------------------------------------------------------
     def statustext(self, text: str, severity: int = mav.MAV_SEVERITY_INFO) -> None:
         if self.on_text is not None:
             self.on_text(text, severity)
+
+    @property
+    def limits(self) -> Limits:
+        """The flight limits its parameters set now."""
+        if self._limits is None or self._limits[0] != self.params.version:
+            self._limits = (self.params.version, self.fw.params.limits(self.params, self.cfg))
+        return self._limits[1]
+
+    @property
+    def speed(self) -> float:
+        """Horizontal speed of position targets: the cruise speed or a slower override."""
+        cruise = self.limits.cruise
+        return cruise if self.speed_override is None else min(self.speed_override, cruise)
+
+    @property
+    def climb(self) -> float:
+        limit = self.limits.climb
+        return limit if self.climb_override is None else min(self.climb_override, limit)
+
+    @property
+    def descent(self) -> float:
+        limit = self.limits.descent
+        return limit if self.descent_override is None else min(self.descent_override, limit)
 
     def altitude(self) -> float:
         return -self.pos[2]
@@ -81,9 +120,9 @@ class Vehicle:
         right = -s * self.acc[0] + c * self.acc[1]
         return math.atan2(right, GRAVITY), -math.atan2(fwd, GRAVITY), self.yaw
 
-    def battery_voltage(self) -> float:
-        """A 4S pack: 16.8 V full, 14.0 V empty."""
-        return 14.0 + 2.8 * self.battery / 100.0
+    def battery_voltage(self, pct: float | None = None) -> float:
+        """A 4S pack: 16.8 V full, 14.0 V empty (at `pct`, the current charge by default)."""
+        return 14.0 + 2.8 * (self.battery if pct is None else pct) / 100.0
 
     def battery_current(self) -> float:
         """Amperes drawn: hover plus a share for speed; idle when disarmed."""
@@ -91,10 +130,7 @@ class Vehicle:
 
     def global_position(self) -> tuple[float, float, float]:
         """Latitude, longitude (degrees) and altitude AMSL (m) of the vehicle."""
-        lat0, lon0, alt0 = self.cfg.home
-        lat = lat0 + math.degrees(self.pos[0] / EARTH_RADIUS_M)
-        lon = lon0 + math.degrees(self.pos[1] / (EARTH_RADIUS_M * math.cos(math.radians(lat0))))
-        return lat, lon, alt0 - self.pos[2]
+        return global_from_local(self.cfg.home, *self.pos)
 
     def reported_target(self) -> tuple[float, float, float] | None:
         """The position target it reports (POSITION_TARGET_LOCAL_NED), in guided mode."""
@@ -103,9 +139,13 @@ class Vehicle:
         tx, ty, tz = self.target
         return tx, ty, tz
 
+    def armable(self) -> bool:
+        """Whether arming would pass its checks now (SYS_STATUS's pre-arm bit)."""
+        return self.mode in self.fw.armable_modes and not self._battery_too_low()
+
     # --- mode, arming ----------------------------------------------------------------
     def set_mode(self, name: str) -> int:
-        """Switch mode; returns a MAV_RESULT."""
+        """A commanded mode switch; returns a MAV_RESULT."""
         if name == self.mode:
             return mav.MAV_RESULT_ACCEPTED
         fw = self.fw
@@ -114,8 +154,15 @@ class Vehicle:
             return mav.MAV_RESULT_DENIED
         if name in self.fw.command_only_modes:
             return mav.MAV_RESULT_DENIED  # e.g. PX4 TAKEOFF: entered through NAV_TAKEOFF
+        self.enter(name)
+        return mav.MAV_RESULT_ACCEPTED
+
+    def enter(self, name: str) -> None:
+        """Switch to mode `name` (one of `fw.modes`) without a command's checks: what a
+        failsafe does."""
         self.mode = name
         self.vel_target = None
+        self.land_point = None
         if name == self.fw.guided_mode or name in self.fw.position_hold_modes:
             self.target = self._stopping_point() if self.in_air() else None
             self.target_mask = 0
@@ -124,7 +171,6 @@ class Vehicle:
         if name == "LAND" and self.in_air():
             self.landed = mav.MAV_LANDED_STATE_LANDING
         self.statustext(f"Mode {name}")
-        return mav.MAV_RESULT_ACCEPTED
 
     def arm(self, force: bool = False) -> int:
         if self.armed:
@@ -133,12 +179,13 @@ class Vehicle:
             if self.mode not in self.fw.armable_modes:
                 self.statustext(f"Arm: mode {self.mode} not armable", mav.MAV_SEVERITY_ERROR)
                 return mav.MAV_RESULT_FAILED
-            if self.battery < self.cfg.battery_failsafe_pct + 5:
+            if self._battery_too_low():
                 self.statustext("PreArm: battery low", mav.MAV_SEVERITY_ERROR)
                 return mav.MAV_RESULT_FAILED
         self.armed = True
         self.motors_on = True
         self.armed_on_ground_since = self.clock()
+        self.failsafes = failsafe.FailsafeState()
         self.statustext("Arming motors")
         return mav.MAV_RESULT_ACCEPTED
 
@@ -156,16 +203,27 @@ class Vehicle:
         self.statustext(f"Disarming motors{': ' + reason if reason else ''}")
         return mav.MAV_RESULT_ACCEPTED
 
-    def takeoff(self, altitude: float) -> int:
-        """Climb to `altitude` metres above home (NAV_TAKEOFF, already converted)."""
+    def _battery_too_low(self) -> bool:
+        """Within 5 % of a battery level that makes the vehicle land or return."""
+        pct = self.battery - 5.0
+        level = self.fw.params.battery(self.params, pct, self.battery_voltage(pct))
+        return level is not None and level[1] != "none"
+
+    # --- flight commands ---------------------------------------------------------------
+    def takeoff(self, altitude: float | None) -> int:
+        """Climb to `altitude` metres above home (NAV_TAKEOFF, already converted; None:
+        the takeoff-altitude parameter's)."""
         fw = self.fw
+        if altitude is None:
+            altitude = self.limits.takeoff_alt
         if not self.armed:
             self.statustext("Takeoff: not armed", mav.MAV_SEVERITY_ERROR)
             return mav.MAV_RESULT_FAILED
         if fw.takeoff_needs_guided and self.mode != fw.guided_mode:
             self.statustext(f"Takeoff: not in {fw.guided_mode}", mav.MAV_SEVERITY_ERROR)
             return mav.MAV_RESULT_FAILED
-        if not math.isfinite(altitude) or altitude <= 0.0:
+        if not math.isfinite(altitude) or not 0.0 < altitude <= WORLD_CEILING_M:
+            self.statustext(f"Takeoff: bad altitude {altitude}", mav.MAV_SEVERITY_ERROR)
             return mav.MAV_RESULT_DENIED
         if self.in_air() and self.landed != mav.MAV_LANDED_STATE_TAKEOFF:
             return mav.MAV_RESULT_FAILED
@@ -179,31 +237,114 @@ class Vehicle:
         return mav.MAV_RESULT_ACCEPTED
 
     def change_speed(self, speed_type: int, speed: float) -> int:
-        """MAV_CMD_DO_CHANGE_SPEED: 0/1 ground speed, 2 climb, 3 descent; -1 no change."""
+        """MAV_CMD_DO_CHANGE_SPEED: 0/1 ground speed, 2 climb, 3 descent; -1 no change,
+        -2 back to the parameter's speed."""
+        if speed_type not in (0, 1, 2, 3):
+            return mav.MAV_RESULT_DENIED
         if speed == -1.0:
             return mav.MAV_RESULT_ACCEPTED  # "no change"
-        if not math.isfinite(speed) or speed <= 0.0:
-            return mav.MAV_RESULT_DENIED
-        if speed_type in (0, 1):
-            self.speed = min(speed, self.cfg.max_speed)
-        elif speed_type == 2:
-            self.climb = min(speed, self.cfg.max_climb)
-        elif speed_type == 3:
-            self.descent = min(speed, self.cfg.max_descent)
+        value: float | None
+        if speed == -2.0:
+            value = None  # "return to default vehicle speed"
+        elif math.isfinite(speed) and speed > 0.0:
+            value = speed
         else:
             return mav.MAV_RESULT_DENIED
-        self.statustext(f"Speed set to {speed:.1f} m/s (type {speed_type})")
+        if speed_type in (0, 1):
+            self.speed_override = value
+        elif speed_type == 2:
+            self.climb_override = value
+        else:
+            self.descent_override = value
+        what = "default" if value is None else f"{value:.1f} m/s"
+        self.statustext(f"Speed set to {what} (type {speed_type})")
         return mav.MAV_RESULT_ACCEPTED
 
+    def reposition(
+        self,
+        north: float,
+        east: float,
+        down: float,
+        *,
+        speed: float | None = None,
+        yaw: float | None = None,
+        change_mode: bool = True,
+    ) -> int:
+        """Fly to a local NED point in the firmware's reposition mode (DO_REPOSITION,
+        ArduPilot's guided "fly to"); a MAV_RESULT."""
+        if not self.armed or not self.in_air() or self.mode == "LAND":
+            self.statustext("Reposition: not flying", mav.MAV_SEVERITY_WARNING)
+            return mav.MAV_RESULT_DENIED
+        if not self._in_world([north, east, down]):
+            return mav.MAV_RESULT_DENIED
+        mode = self.fw.reposition_mode
+        if self.mode != mode:
+            if not change_mode:
+                return mav.MAV_RESULT_DENIED
+            self.enter(mode)
+        self.target = [north, east, down]
+        self.target_mask = 0
+        self.vel_target = None
+        if speed is not None:
+            self.speed_override = speed
+        if yaw is not None and self.fw.reposition_yaw:
+            self.yaw_target = _wrap(yaw)
+        return mav.MAV_RESULT_ACCEPTED
+
+    def fly_to_global(
+        self, lat: float, lon: float, alt: float, relative: bool, *, change_mode: bool
+    ) -> bool:
+        """`reposition` to a latitude, longitude and altitude (above home if `relative`,
+        else AMSL); whether it was accepted."""
+        north, east = local_from_global(self.cfg.home, lat, lon)
+        down = -alt if relative else self.cfg.home[2] - alt
+        result = self.reposition(north, east, down, change_mode=change_mode)
+        return result == mav.MAV_RESULT_ACCEPTED
+
+    def land_start(self) -> int:
+        """MAV_CMD_DO_LAND_START: fly the stored landing sequence (to its NAV_LAND point,
+        then land); FAILED without one, as ArduPilot answers."""
+        item = self.missions.landing_sequence()
+        if item is None:
+            self.statustext("No landing sequence in the mission", mav.MAV_SEVERITY_WARNING)
+            return mav.MAV_RESULT_FAILED
+        if not self.armed or not self.in_air():
+            return mav.MAV_RESULT_DENIED
+        point = None
+        if item.global_frame and (item.x or item.y):
+            point = local_from_global(self.cfg.home, item.x / 1e7, item.y / 1e7)
+            if not self._in_world([point[0], point[1], 0.0]):
+                return mav.MAV_RESULT_DENIED
+        self.enter("LAND")
+        self.land_point = point
+        self.statustext("Landing sequence")
+        return mav.MAV_RESULT_ACCEPTED
+
+    def gcs_heard(self) -> None:
+        """A ground station's heartbeat arrived (the GCS-loss failsafe watches these)."""
+        self.gcs_heard_at = self.clock()
+        self.failsafes.gcs_lost = False
+
     def _setpoints_streaming(self) -> bool:
-        now = self.clock()
-        recent = [t for t in self.setpoint_times if now - t < 1.0]
-        return len(recent) >= 3 and now - recent[-1] < self.cfg.offboard_loss_s
+        """PX4 enters OFFBOARD once setpoints arrive: one within the loss timeout will do
+        (MAVSDK sends one, then starts offboard, then keeps streaming)."""
+        timeout = self.fw.params.offboard_loss(self.params, self.cfg).timeout
+        last = self.last_setpoint_at
+        return last is not None and self.clock() - last <= timeout
 
     def _stopping_point(self) -> list[float]:
         """Where the vehicle can stop from its current velocity (ArduCopter's brake)."""
-        a = max(self.cfg.max_accel, 0.1)
+        a = max(self.limits.accel, 0.1)
         return [p + v * abs(v) / (2 * a) for p, v in zip(self.pos, self.vel, strict=True)]
+
+    def _in_world(self, target: list[float]) -> bool:
+        if not finite(*target):
+            return False
+        inside = math.hypot(target[0], target[1]) <= WORLD_RADIUS_M
+        if not inside or abs(target[2]) > WORLD_CEILING_M:
+            self.statustext("Target outside the simulated world", mav.MAV_SEVERITY_WARNING)
+            return False
+        return True
 
     # --- position targets ------------------------------------------------------------
     def position_target(
@@ -215,16 +356,18 @@ class Vehicle:
         yaw: float,
     ) -> None:
         """SET_POSITION_TARGET_LOCAL_NED (no answer in MAVLink: a refused target is
-        ignored, as both autopilots do outside their guided mode)."""
-        now = self.clock()
-        self.setpoint_times = [t for t in self.setpoint_times if now - t < 1.0]
-        self.setpoint_times.append(now)
+        ignored, as both autopilots do outside their guided mode). A used field that is
+        not finite refuses the target; a NaN yaw keeps the heading."""
+        use_pos = not mask & IGNORE_POSITION
+        use_vel = not mask & IGNORE_VELOCITY
+        bad_velocity = use_vel and not use_pos and not finite(*velocity)
+        if (use_pos and not finite(*position)) or bad_velocity:
+            return
+        self.last_setpoint_at = self.clock()
         if not self.guided() or not self.armed:
             return
         if not self.in_air() and not self.fw.setpoint_takes_off:
             return  # ArduCopter needs NAV_TAKEOFF first
-        use_pos = not mask & IGNORE_POSITION
-        use_vel = not mask & IGNORE_VELOCITY
         if use_pos:
             offset = list(position)
             if frame == mav.MAV_FRAME_LOCAL_NED:
@@ -239,17 +382,27 @@ class Vehicle:
             else:
                 self.statustext(f"Frame {frame} unsupported", mav.MAV_SEVERITY_WARNING)
                 return
+            if not self._in_world(target):
+                return
             if self.fw.setpoint_takes_off and not self.in_air() and target[2] < -0.1:
                 self.landed = mav.MAV_LANDED_STATE_TAKEOFF
             self.target = target
             self.target_mask = mask
             self.vel_target = None
         elif use_vel:
-            self.vel_target = list(velocity)
+            self.vel_target = self._capped_velocity(velocity)
             self.target = None
             self.target_mask = mask
-        if not mask & IGNORE_YAW:
-            self.yaw_target = yaw
+        if not mask & IGNORE_YAW and math.isfinite(yaw):
+            self.yaw_target = _wrap(yaw)
+
+    def _capped_velocity(self, velocity: tuple[float, float, float]) -> list[float]:
+        """A velocity target within the speed, climb and descent limits."""
+        vn, ve, vd = velocity
+        horizontal = math.hypot(vn, ve)
+        if horizontal > self.speed:
+            vn, ve = vn / horizontal * self.speed, ve / horizontal * self.speed
+        return [vn, ve, max(-self.climb, min(self.descent, vd))]
 
     # --- physics ---------------------------------------------------------------------
     def step(self, dt: float) -> None:
@@ -257,9 +410,11 @@ class Vehicle:
         now = self.clock()
         fw = self.fw
         if fw.needs_setpoint_stream and self.guided() and not self._setpoints_streaming():
-            self.mode = fw.stream_loss_mode
-            self.target = self._stopping_point() if self.in_air() else None
-            self.statustext("Offboard lost: holding", mav.MAV_SEVERITY_WARNING)
+            rule = fw.params.offboard_loss(self.params, self.cfg)
+            self.statustext("Offboard lost", mav.MAV_SEVERITY_WARNING)
+            self.act(rule.action)
+        if self.armed and self.in_air():
+            failsafe.check(self, now)
         if not self.motors_on:
             self._fall(dt)
             return
@@ -271,16 +426,23 @@ class Vehicle:
         self._ground_contact(now)
         self._battery_step(dt)
 
+    def act(self, action: str) -> None:
+        """Carry out a failsafe action: "none", "hold", "rtl", "land" or "terminate"."""
+        if action == "hold":
+            self.enter(self.fw.hold_mode)
+        elif action == "rtl":
+            self.enter("RTL")
+        elif action == "land":
+            self.enter("LAND")
+        elif action == "terminate":
+            self.disarm(force=True, reason="flight termination")
+
     def _desired_velocity(self) -> list[float]:
         mode = self.mode
         if not self.in_air() and self.landed != mav.MAV_LANDED_STATE_TAKEOFF:
             return [0.0, 0.0, 0.0]
         if mode == "LAND":
-            hold = self.target or self._stopping_point()
-            self.target = [hold[0], hold[1], 0.0]
-            v = self._toward(self.target, self.speed)
-            speed = self.cfg.land_speed if self.altitude() < 10 else self.descent
-            return [v[0], v[1], speed]
+            return self._land_velocity()
         if mode == "RTL":
             return self._rtl_velocity()
         if self.vel_target is not None and self.guided():
@@ -289,8 +451,21 @@ class Vehicle:
             self.target = self._stopping_point()
         return self._toward(self.target, self.speed)
 
+    def _land_velocity(self) -> list[float]:
+        if self.land_point is not None:  # a landing sequence: get there first
+            n, e = self.land_point
+            if math.hypot(n - self.pos[0], e - self.pos[1]) > 0.3:
+                self.target = [n, e, self.pos[2]]
+                return self._toward(self.target, self.speed)
+            self.land_point = None
+        hold = self.target or self._stopping_point()
+        self.target = [hold[0], hold[1], 0.0]
+        v = self._toward(self.target, self.speed)
+        speed = self.limits.land_speed if self.altitude() < 10 else self.descent
+        return [v[0], v[1], speed]
+
     def _rtl_velocity(self) -> list[float]:
-        alt = max(self.cfg.rtl_altitude, self.altitude())
+        alt = max(failsafe.rtl_altitude(self), self.altitude())
         if self.rtl_phase == "climb":
             self.target = [self.pos[0], self.pos[1], -alt]
             if abs(self.pos[2] + alt) < 0.2:
@@ -307,20 +482,25 @@ class Vehicle:
     def _toward(self, target: list[float], speed: float) -> list[float]:
         """Velocity that reaches `target` without overshoot: capped by `speed`, by the
         braking distance (sqrt(2 a d)) and, near the target, by a proportional gain."""
-        a, k = self.cfg.max_accel, self.cfg.position_gain
+        a, k = self.limits.accel, self.cfg.position_gain
         dn, de, dd = (t - p for t, p in zip(target, self.pos, strict=True))
         dist = math.hypot(dn, de)
         out = [0.0, 0.0, 0.0]
         if dist > 1e-6:
             mag = min(speed, math.sqrt(2 * a * dist), k * dist)
             out[0], out[1] = dn / dist * mag, de / dist * mag
-        limit = self.descent if dd > 0 else self.climb
+        if dd > 0:
+            limit = self.descent
+        elif self.landed == mav.MAV_LANDED_STATE_TAKEOFF:
+            limit = min(self.limits.takeoff_speed, self.climb)
+        else:
+            limit = self.climb
         mag = min(limit, math.sqrt(2 * a * abs(dd)), k * abs(dd))
         out[2] = math.copysign(mag, dd)
         return out
 
     def _accelerate(self, desired: list[float], dt: float) -> None:
-        a = self.cfg.max_accel
+        a = self.limits.accel
         dvn, dve = desired[0] - self.vel[0], desired[1] - self.vel[1]
         dv = math.hypot(dvn, dve)
         scale = min(1.0, a * dt / dv) if dv > 1e-9 else 0.0
@@ -356,13 +536,15 @@ class Vehicle:
                 self.touchdown_since = now
                 self.statustext("Landed")
         if self.landed == mav.MAV_LANDED_STATE_ON_GROUND and self.armed:
-            if self.touchdown_since is not None and now - self.touchdown_since > (
-                self.cfg.land_disarm_s
-            ):
-                self.touchdown_since = None
-                self.disarm(reason="landed")
-            elif self.armed_on_ground_since is not None and now - self.armed_on_ground_since > (
-                self.cfg.disarm_delay_s
+            limits = self.limits
+            if self.touchdown_since is not None:
+                if limits.land_disarm > 0 and now - self.touchdown_since > limits.land_disarm:
+                    self.touchdown_since = None
+                    self.disarm(reason="landed")
+            elif (
+                self.armed_on_ground_since is not None
+                and limits.disarm_delay > 0
+                and now - self.armed_on_ground_since > limits.disarm_delay
             ):
                 self.disarm(reason="auto-disarm")
 
@@ -383,7 +565,8 @@ class Vehicle:
         speed = math.hypot(*self.vel)
         self.battery -= 100.0 * dt / self.cfg.battery_flight_s * (1.0 + 0.05 * speed)
         self.battery = max(self.battery, 0.0)
-        fs = self.cfg.battery_failsafe_pct
-        if self.battery < fs and self.in_air() and self.mode != "LAND":
-            self.statustext("Battery failsafe: landing", mav.MAV_SEVERITY_CRITICAL)
-            self.set_mode("LAND")
+
+
+def _wrap(angle: float) -> float:
+    """An angle in radians into [-pi, pi)."""
+    return (angle + math.pi) % (2 * math.pi) - math.pi
