@@ -159,8 +159,8 @@ class CommandExecutor:
             if not result.ok:
                 return self.sent(event, ctx, action, result, link, target=target)
         # The heading flown with the target (None: the autopilot's own; `sent` records it).
-        yaw = self.heading.yaw_for(event.drone, tel, target)
-        result = link.goto_local(*target, yaw=yaw)
+        heading = self.heading.yaw_for(event.drone, tel, target)
+        result = link.goto_local(*target, yaw=heading)
         return self.sent(event, ctx, action, result, link, track="move", target=target)
 
     def sent(
