@@ -4,9 +4,9 @@
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import pytest
-from conftest import Connect, MemoryLinks, ServeSim
 
 from proxima.drone.controller import DroneController
 from proxima.drone.heading import HeadingPolicy, bearing
@@ -16,6 +16,9 @@ from proxima.drone.mavlink.setpoint import Setpoint
 from proxima.drone.memory import ManualClock
 from proxima.drone.safety import SafetyConfig, SafetyGate
 from proxima.events import CommandEvent
+
+if TYPE_CHECKING:  # conftest is not importable by name beside other folders' conftest
+    from conftest import Connect, MemoryLinks, ServeSim
 
 
 def _angle(a: float, b: float) -> float:
