@@ -1,5 +1,5 @@
 // Builds the console into ../static/, which FastAPI serves. `npm run dev` proxies the
-// API to a `proxima serve` on 127.0.0.1:8000.
+// API and the 3D view (/viser, with its WebSocket) to a `proxima serve` on 127.0.0.1:8000.
 import { defineConfig } from "vite";
 
 // The build output is never committed: mark the whole folder ignored from inside it.
@@ -26,6 +26,7 @@ export default defineConfig({
     host: "127.0.0.1",
     proxy: {
       "/api": { target: "http://127.0.0.1:8000", ws: true },
+      "/viser": { target: "http://127.0.0.1:8000", ws: true },
     },
   },
 });

@@ -103,7 +103,15 @@ class DroneSettings(_Section):
 
 
 class ServerSettings(_Section):
-    """The console's HTTP server, its database and the 3D view."""
+    """The console's HTTP server, its database and the 3D view.
+
+    `tls_certfile` and `tls_keyfile` (PEM files, both or neither) switch the console to
+    HTTPS. The 3D view (viser) listens on `viser_host`:`viser_port` (0: a free port picked
+    at start) and is reached only through the console's `/viser/` with a login. Failed
+    logins are slowed down: after `login_free_failures` failures of one user name or one
+    client address, each further one blocks that key `login_backoff_s`, doubling, at most
+    `login_backoff_max_s`.
+    """
 
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
@@ -111,11 +119,33 @@ class ServerSettings(_Section):
     static_dir: Path | None = None  # default: the shipped console (proxima.shipped)
     models_dir: Path = Path("models")
     session_ttl_s: float = Field(12 * 3600, gt=0)
+    tls_certfile: Path | None = None
+    tls_keyfile: Path | None = None
     viser_enabled: bool = True
     viser_host: str = "127.0.0.1"
-    viser_port: int = Field(8081, ge=0, le=65535)
+    viser_port: int = Field(0, ge=0, le=65535)
     thumbnail_hz: float = Field(2.0, gt=0, description="JPEG thumbnails of camera streams")
     thumbnail_width: int = Field(320, ge=32)
+    login_free_failures: int = Field(5, ge=1, le=100)
+    login_backoff_s: float = Field(1.0, gt=0, le=60)
+    login_backoff_max_s: float = Field(300.0, gt=0, le=3600)
+
+    @model_validator(mode="after")
+    def _check_tls(self) -> ServerSettings:
+        if (self.tls_certfile is None) != (self.tls_keyfile is None):
+            raise ValueError("set both tls_certfile and tls_keyfile, or neither")
+        for name in ("tls_certfile", "tls_keyfile"):
+            path = getattr(self, name)
+            if path is not None and not path.is_file():
+                raise ValueError(f"{name}: no such file: {path}")
+        if self.login_backoff_max_s < self.login_backoff_s:
+            raise ValueError("login_backoff_max_s must be at least login_backoff_s")
+        return self
+
+    @property
+    def tls(self) -> bool:
+        """Whether the console serves HTTPS."""
+        return self.tls_certfile is not None
 
 
 class ViewSettings(_Section):

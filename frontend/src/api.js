@@ -3,10 +3,13 @@
 
 const TOKEN_KEY = "proxima.token";
 
+// Every error body is the server's ErrorOut: `detail` in words, `errors` per field (422).
 export class ApiError extends Error {
-  constructor(status, detail) {
+  constructor(status, detail, { errors = [], retryAfter = null } = {}) {
     super(typeof detail === "string" ? detail : JSON.stringify(detail));
     this.status = status;
+    this.errors = errors;
+    this.retryAfter = retryAfter; // seconds, on a 429 (too many failed logins)
   }
 }
 
@@ -47,7 +50,11 @@ export async function api(path, { method = "GET", body } = {}) {
   }
   if (!res.ok) {
     if (res.status === 401 && path !== "/auth/login") onUnauthorized();
-    throw new ApiError(res.status, (data && data.detail) || res.statusText);
+    const retry = Number.parseInt(res.headers.get("Retry-After") || "", 10);
+    throw new ApiError(res.status, (data && data.detail) || res.statusText, {
+      errors: (data && data.errors) || [],
+      retryAfter: Number.isFinite(retry) ? retry : null,
+    });
   }
   return data;
 }

@@ -52,6 +52,29 @@ function route() {
   }
 }
 
+// After too many failed logins the server answers 429 with Retry-After: say so, count
+// down, and keep the button disabled until a login may be tried again.
+let throttleTimer = null;
+function showThrottled(seconds) {
+  const button = $("#login-form button[type=submit]");
+  const error = $("#login-error");
+  clearInterval(throttleTimer);
+  let left = seconds;
+  const tick = () => {
+    if (left <= 0) {
+      clearInterval(throttleTimer);
+      button.disabled = false;
+      error.textContent = "";
+      return;
+    }
+    button.disabled = true;
+    error.textContent = `Too many failed logins: try again in ${left} s.`;
+    left -= 1;
+  };
+  tick();
+  throttleTimer = setInterval(tick, 1000);
+}
+
 $("#login-form").addEventListener("submit", async (ev) => {
   ev.preventDefault();
   const form = new FormData(ev.target);
@@ -65,6 +88,10 @@ $("#login-form").addEventListener("submit", async (ev) => {
     ev.target.reset();
     await start();
   } catch (err) {
+    if (err instanceof ApiError && err.status === 429 && err.retryAfter) {
+      showThrottled(err.retryAfter);
+      return;
+    }
     $("#login-error").textContent = err instanceof ApiError ? err.message : String(err);
   }
 });

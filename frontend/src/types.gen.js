@@ -41,6 +41,27 @@ export const MESSAGE_TYPES = Object.freeze([
 /** @typedef {MessageMap[keyof MessageMap]} Message */
 
 /**
+ * One row of the audit log.
+ * @typedef {object} AuditEntryOut
+ * @property {number} id
+ * @property {number} ts unix time
+ * @property {string} actor the user name (for a failed login: the name tried)
+ * @property {string} action area.verb: auth.login, drone.stop, model.promote, ...
+ * @property {string} target what it was done to: a drone, model, run, sample, user
+ * @property {"ok" | "refused" | "failed"} outcome
+ * @property {string} client the client's address
+ * @property {Record<string, any>} detail
+ */
+
+/**
+ * Audit rows, newest first; pass `next_before_id` as `before_id` for the next page
+ * (None: this was the last).
+ * @typedef {object} AuditPage
+ * @property {AuditEntryOut[]} entries
+ * @property {number | null} next_before_id
+ */
+
+/**
  * A command decided for a drone. `command` is the gesture it came from; `stream` is
  * the stream that saw the gesture, `drone` the drone it goes to.
  * @typedef {object} CommandEvent
@@ -120,8 +141,24 @@ export const MESSAGE_TYPES = Object.freeze([
  */
 
 /**
+ * Every error body: `detail` says what went wrong in words; `errors` lists each
+ * problem of a request that does not match its schema (empty otherwise).
+ * @typedef {object} ErrorOut
+ * @property {string} detail
+ * @property {FieldError[]} errors
+ */
+
+/**
  * @typedef {object} EstopConfirm
  * @property {string} confirmation_id
+ */
+
+/**
+ * One problem of a request that does not match its schema.
+ * @typedef {object} FieldError
+ * @property {(string | number)[]} loc where: ["body", "rounds"], ["query", "limit"]
+ * @property {string} msg
+ * @property {string} type
  */
 
 /**
@@ -164,7 +201,7 @@ export const MESSAGE_TYPES = Object.freeze([
 /**
  * @typedef {object} PasswordChange
  * @property {string} old_password
- * @property {string} new_password
+ * @property {string} new_password at least 10 characters, not a well-known password
  */
 
 /**
@@ -198,7 +235,12 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {string} stream
  * @property {number} [frames]
  * @property {number} [countdown_s]
- * @property {string | null} [label]
+ * @property {"all_clear" | "have_command" | "hover" | "land" | "land_direction" | "move_ahead" | "move_downward" | "move_to_left" | "move_to_right" | "move_upward" | "not_clear" | "slow_down" | "wave_off" | null} [label]
+ */
+
+/**
+ * @typedef {object} RunRef
+ * @property {string} id
  */
 
 /**
@@ -235,9 +277,11 @@ export const MESSAGE_TYPES = Object.freeze([
  */
 
 /**
+ * Keep a sample (with a gesture label, or the label it was recorded with) or delete
+ * it; keeping one that has no label and gets none answers 409.
  * @typedef {object} SampleReview
  * @property {"kept" | "deleted"} status
- * @property {string | null} [label]
+ * @property {"all_clear" | "have_command" | "hover" | "land" | "land_direction" | "move_ahead" | "move_downward" | "move_to_left" | "move_to_right" | "move_upward" | "not_clear" | "slow_down" | "wave_off" | null} [label]
  */
 
 /**
@@ -347,7 +391,7 @@ export const MESSAGE_TYPES = Object.freeze([
 /**
  * @typedef {object} UserCreate
  * @property {string} username
- * @property {string} password
+ * @property {string} password at least 10 characters, not a well-known password
  * @property {"supervisor" | "viewer"} role
  */
 

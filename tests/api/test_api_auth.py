@@ -16,7 +16,7 @@ from proxima.store.users import User
 
 
 def _concrete(path: str) -> str:
-    return re.sub(r"\{[^}]+\}", "x", path)
+    return re.sub(r"\{[^}]+\}", "1", path)
 
 
 def test_health_is_the_only_open_route(api: Api) -> None:
@@ -89,22 +89,29 @@ def test_supervisor_manages_users(api: Api) -> None:
     c = api.client
     r = c.post(
         "/api/users",
-        json={"username": "eve", "password": "short", "role": "viewer"},
+        json={"username": "eve", "password": "qz7Xw", "role": "viewer"},
         headers=api.admin,
     )
-    assert r.status_code == 422 and "too short" in r.json()["detail"]
+    assert r.status_code == 422 and "at least 10 characters" in r.json()["detail"]
+    assert "qz7Xw" not in r.text  # the password itself is never echoed
     r = c.post(
         "/api/users",
-        json={"username": "eve", "password": "password", "role": "viewer"},
+        json={"username": "eve", "password": "Administrator", "role": "viewer"},
         headers=api.admin,
     )
-    assert r.status_code == 422
+    assert r.status_code == 422 and "well-known" in r.json()["detail"]
     r = c.post(
         "/api/users",
         json={"username": "eve", "password": "a-long-passphrase", "role": "viewer"},
         headers=api.admin,
     )
     assert r.status_code == 201
+    r = c.post(
+        "/api/users",
+        json={"username": "eve", "password": "another-passphrase", "role": "viewer"},
+        headers=api.admin,
+    )
+    assert r.status_code == 409 and "already exists" in r.json()["detail"]
     names = [u["username"] for u in c.get("/api/users", headers=api.viewer).json()]
     assert names == [ADMIN[0], VIEWER[0], "eve"]
     assert c.post("/api/users/eve/disable", headers=api.admin).status_code == 200

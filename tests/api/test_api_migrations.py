@@ -38,6 +38,7 @@ def test_head_matches_every_table_model(tmp_path: Path) -> None:
         "training_runs",
         "training_rounds",
         "training_client_results",
+        "audit_log",
     } <= tables
     migrations.upgrade(engine)  # idempotent
 

@@ -54,8 +54,9 @@ def test_list_and_promote_into_the_live_engine(tmp_path: Path, checkpoint_path: 
             active = [m["name"] for m in listed["models"] if m["active"]]
             assert active == ["runs/fedavg-r5.pt"]
 
+            # Not a checkpoint the engine can run: refused by its state (409), not the schema.
             r = httpx.post(f"{server.url}/api/models/broken.pt/promote", headers=h)
-            assert r.status_code == 422 and "broken.pt" in r.json()["detail"]
+            assert r.status_code == 409 and "broken.pt" in r.json()["detail"]
             assert runtime.engine.pipelines["front"].classifier is after
             r = httpx.post(f"{server.url}/api/models/..%2Fc.db/promote", headers=h)
             assert r.status_code == 404

@@ -42,10 +42,11 @@ def test_the_form_gets_the_bounds_and_the_runners_defaults(tmp_path: Path) -> No
         "description": "federated rounds",
         "default": 7,
     }
-    assert form["learning_rate"]["exclusiveMinimum"] == 0 and form["learning_rate"]["maximum"] == 1
+    assert form["learning_rate"]["minimum"] == 1e-6 and form["learning_rate"]["maximum"] == 1
     assert form["batch_size"]["maximum"] == 4096 and form["batch_size"]["default"] == 32
     assert form["fraction_fit"]["exclusiveMinimum"] == 0 and form["fraction_fit"]["maximum"] == 1
-    assert (form["local_epochs"]["maximum"], form["min_clients"]["maximum"]) == (100, 100)
+    # min_clients: at most the drones of the runner's federation (its default fleet of 3).
+    assert (form["local_epochs"]["maximum"], form["min_clients"]["maximum"]) == (100, 3)
     assert form["strategy"]["enum"] == ["fedavg", "fedprox", "fedadam", "fedavgm"]
     assert form["strategy"]["default"] == "fedprox"
     assert form["include_samples"] == {"type": "boolean", "default": True}
@@ -62,6 +63,7 @@ def test_the_form_gets_the_bounds_and_the_runners_defaults(tmp_path: Path) -> No
         ("local_epochs", 101),
         ("batch_size", 4097),
         ("learning_rate", 0.0),
+        ("learning_rate", 5e-324),
         ("learning_rate", 1.5),
         ("fraction_fit", 0.0),
         ("min_clients", 0),
@@ -80,3 +82,31 @@ def test_out_of_bounds_is_refused_by_the_api_and_by_flconfig(
     assert runner.list_runs() == []
     with pytest.raises(ConfigError, match=repr(field.replace("_", "-"))):
         FLConfig(**{field: value})  # the CLI and the Flower apps refuse it too
+
+
+def test_min_clients_beyond_the_drones_is_refused_by_the_api_and_the_runner(
+    tmp_path: Path,
+) -> None:
+    # The test settings configure two drones: the federation's clients are those two.
+    from proxima.api.runtime import federated_drones
+
+    settings = make_settings(tmp_path)
+    runner = FederatedRunner(
+        tmp_path / "runs.db", tmp_path / "models", drones=federated_drones(settings)
+    )
+    assert runner.clients == ["main", "second"]
+    app = create_app(settings, EventBus(), training=runner)
+    with TestClient(app) as client:
+        admin = login(client, ADMIN)
+        form = client.get("/api/config", headers=admin).json()["training_form"]
+        assert form["min_clients"]["maximum"] == 2
+        r = client.post("/api/training/runs", json={"min_clients": 3}, headers=admin)
+        assert r.status_code == 409
+        assert "min_clients 3 is more than the 2 drones" in r.json()["detail"]
+        assert "main, second" in r.json()["detail"]
+        audit = client.get("/api/audit?action=training.start", headers=admin).json()
+        assert audit["entries"][0]["outcome"] == "refused"
+    assert runner.list_runs() == []
+    with pytest.raises(ValueError, match="'min-clients': 3 is more than the 2 drones"):
+        runner.start_run({"min_clients": 3})  # what `proxima fl deploy-local` calls
+    assert runner.list_runs() == []

@@ -1,6 +1,7 @@
 """`proxima demo` as a user runs it: a real process tree (three `proxima sim-drone`
 processes, replayed streams, the console, the 3D view) from the shipped default config
-(with free ports), the console answering, and SIGINT / SIGTERM leaving no process."""
+(with free ports), the console answering, the 3D view behind its login, and SIGINT,
+SIGTERM and SIGHUP leaving no process (also with a one-drone config)."""
 
 from __future__ import annotations
 
@@ -8,15 +9,18 @@ import json
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import threading
 import time
 import tomllib
+import urllib.error
 import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 
+import psutil
 import pytest
 
 from proxima.demo.cli import DEFAULT_CONFIG
@@ -158,9 +162,22 @@ def assert_everything_up(d: DemoProcess) -> tuple[str, dict[str, int]]:
     base = d.url("console")
     status, body = get(f"{base}/api/health")
     assert status == 200 and json.loads(body)["status"] == "ok"
-    status, body = get(d.url("3D view"))
-    assert status == 200 and b"<html" in body.lower()
+    assert_view_behind_login(d)
     return base, sims
+
+
+def assert_view_behind_login(d: DemoProcess) -> None:
+    """The 3D view is the console's /viser/: refused without a session, viser's page with
+    the cookie a login sets."""
+    view = d.url("3D view") + "/viser/"
+    assert view.startswith(d.url("console"))
+    with pytest.raises(urllib.error.HTTPError) as refused:
+        get(view)
+    assert refused.value.code == 401
+    token = login(d.url("console"))
+    req = urllib.request.Request(view, headers={"Cookie": f"proxima_view={token}"})
+    with urllib.request.urlopen(req, timeout=10) as resp:
+        assert resp.status == 200 and b"<html" in resp.read().lower()
 
 
 def assert_stopped(d: DemoProcess, sims: dict[str, int]) -> None:
@@ -193,3 +210,60 @@ def test_demo_stops_on_sigterm(demo: DemoProcess) -> None:
     assert "(view f, existing)" in demo.output  # the first test's streams were reused
     demo.proc.send_signal(signal.SIGTERM)
     assert_stopped(demo, sims)
+
+
+def small_config(tmp: Path) -> Path:
+    """One simulated drone and one stream replaying a LASER clip as it is."""
+    from proxima.gesture.data_source import resolve_laser_dir
+
+    clip = sorted(Path(resolve_laser_dir(None)).glob("DJI_*_hover_f.MP4.csv"))[0]
+    path = tmp / "small.toml"
+    path.write_text(
+        "[[streams]]\n"
+        'name = "front"\n'
+        f'uri = "replay:{clip}@30"\n'
+        'drone = "main"\n'
+        "[[drones]]\n"
+        'name = "main"\n'
+        f'connection = "udpin:127.0.0.1:{free_udp_port()}"\n'
+        "[server]\n"
+        f'db_path = "{tmp / "runs" / "small.db"}"\n'
+    )
+    return path
+
+
+def descendants(pid: int) -> list[psutil.Process]:
+    return psutil.Process(pid).children(recursive=True)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(240)
+@pytest.mark.parametrize(
+    "sig", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP], ids=lambda s: s.name
+)
+def test_a_small_demo_stops_every_child_on_a_signal(
+    sig: signal.Signals, tmp_path: Path, checkpoint: Path
+) -> None:
+    d = DemoProcess(small_config(tmp_path), checkpoint)
+    before: list[psutil.Process] = []
+    try:
+        d.wait_ready(150)
+        assert set(d.sim_pids()) == {"main"}, d.output
+        before = descendants(d.proc.pid)
+        assert {p.pid for p in before} >= set(d.sim_pids().values())
+        console_port = int(d.url("console").rsplit(":", 1)[1])
+        signalled = time.monotonic()
+        d.proc.send_signal(sig)
+        assert d.proc.wait(30) == 0, d.output
+        _, alive = psutil.wait_procs(before, timeout=5)
+        took = time.monotonic() - signalled
+    finally:
+        d.kill()
+        for p in before:
+            if p.is_running():
+                p.kill()
+    assert not alive, f"left running after {sig.name}: {alive}"
+    assert "stopped (simulators: main exit 0)" in d.output
+    with socket.socket() as s:  # the console (and the 3D view behind it) is gone too
+        assert s.connect_ex(("127.0.0.1", console_port)) != 0
+    print(f"\n{sig.name}: demo and {len(before)} children gone {took:.1f} s after the signal")

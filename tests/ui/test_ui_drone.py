@@ -103,6 +103,8 @@ def test_3d_view_shows_the_drone(page, flying: Console) -> None:  # type: ignore
     assert trail
     login(page, flying.url)
     page.click("nav a[data-page='3d']")
+    # Through the console's own port, behind its login: viser's port is never shown.
+    assert page.get_attribute("iframe.viser", "src") == "/viser/"
     frame = page.frame_locator("iframe.viser")
     frame.locator("text=Connected").wait_for(timeout=20000)
     frame.locator("text=/drones").wait_for()

@@ -26,3 +26,35 @@ def test_login_and_logout(page, tmp_path: Path) -> None:  # type: ignore[no-unty
         assert page.inner_text("#whoami") == f"{ADMIN[0]} (supervisor)"
     finally:
         console.close()
+
+
+def test_throttled_login_counts_down_then_lets_in(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    console = start_console(
+        tmp_path,
+        server={
+            "db_path": str(tmp_path / "console.db"),
+            "login_free_failures": 1,
+            "login_backoff_s": 3.0,
+            "login_backoff_max_s": 3.0,
+        },
+    )
+    try:
+        page.goto(console.url + "/")
+        page.fill("#login-form input[name=username]", ADMIN[0])
+        for _ in range(2):  # the second failure starts a 3 s block
+            page.fill("#login-form input[name=password]", "not-the-password")
+            page.click("#login-form button[type=submit]")
+            page.wait_for_selector("#login-error:has-text('wrong user name or password')")
+            page.evaluate("document.querySelector('#login-error').textContent = ''")
+        page.fill("#login-form input[name=password]", ADMIN[1])
+        page.click("#login-form button[type=submit]")
+        page.wait_for_selector("#login-error:has-text('Too many failed logins: try again in')")
+        assert page.is_disabled("#login-form button[type=submit]")
+        screenshot(page, "login-throttled")
+        # The countdown ends, the button comes back, and the right password works.
+        page.wait_for_selector("#login-form button[type=submit]:enabled", timeout=10000)
+        assert page.inner_text("#login-error") == ""
+        page.click("#login-form button[type=submit]")
+        page.wait_for_selector("#topbar:not([hidden])")
+    finally:
+        console.close()

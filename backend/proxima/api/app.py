@@ -2,24 +2,33 @@
 
 Building the app migrates the database to the newest schema (keeping its rows) and
 makes sure a first supervisor exists; the hub binds to the server's loop at start-up.
+Every error answers `ErrorOut` (`api/errors.py`); the built frontend is served at `/`,
+except under `/api` and `/viser` (the 3D view's proxy), which it never shadows.
 """
 
 from __future__ import annotations
 
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator, Callable, MutableMapping
 from contextlib import asynccontextmanager
+from typing import Any
 
 from fastapi import FastAPI
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
 from sqlalchemy import Engine as DbEngine
+from starlette.routing import Match, Mount
+from starlette.types import Scope
 
 from proxima import __version__
+from proxima.api.audit import Audit
+from proxima.api.auth import VIEW_PATH
+from proxima.api.errors import install_error_handlers
 from proxima.api.hub import WebSocketHub
 from proxima.api.interfaces import EmergencyStop, ModelPromoter, TrainingRunner
 from proxima.api.live import LiveState
 from proxima.api.recorder import SampleRecorder
 from proxima.api.routers import (
+    audit,
     auth,
     commands,
     config,
@@ -30,12 +39,15 @@ from proxima.api.routers import (
     streams,
     training,
     users,
+    view,
     ws,
 )
 from proxima.api.services import Console
+from proxima.api.throttle import LoginThrottle, ThrottlePolicy
 from proxima.events import EventBus
 from proxima.settings import Settings
 from proxima.store import migrations
+from proxima.store.audit import AuditLog
 from proxima.store.base import make_engine, make_sessionmaker
 from proxima.store.users import ensure_first_supervisor
 
@@ -50,8 +62,27 @@ ROUTERS = (
     samples.router,
     training.router,
     models.router,
+    audit.router,
     ws.router,
 )
+
+API_DESCRIPTION = """The operator console's API. Log in with `POST /api/auth/login`, then send
+`Authorization: Bearer TOKEN`; only `/api/health` and the login are open. Every error is an
+`ErrorOut`: 401 no valid session, 403 not allowed, 404 no such thing, 409 refused by the
+server's state, 422 the request does not match its schema (each problem in `errors`), 429
+too many failed logins (`Retry-After`), 503 the subsystem does not run in this server."""
+
+
+class FrontendMount(Mount):
+    """The built frontend at `/`, matching no path under `/api` or `/viser`: those answer
+    their own 404 and 405 (as `ErrorOut`, with `Allow`) instead of the file server's."""
+
+    def matches(self, scope: Scope) -> tuple[Match, MutableMapping[str, Any]]:
+        path = scope.get("path", "")
+        if path in ("/api", VIEW_PATH) or path.startswith(("/api/", f"{VIEW_PATH}/")):
+            return Match.NONE, {}
+        return super().matches(scope)
+
 
 _NOT_BUILT = """<!doctype html><title>Proxima</title>
 <p>The console's frontend is not built. Run <code>make frontend</code>
@@ -122,6 +153,14 @@ def create_app(
         hub=WebSocketHub(bus, live),
         live=live,
         recorder=SampleRecorder(bus, sessions),
+        audit=Audit(AuditLog(db_engine)),
+        throttle=LoginThrottle(
+            ThrottlePolicy(
+                free_failures=settings.server.login_free_failures,
+                base_s=settings.server.login_backoff_s,
+                max_s=settings.server.login_backoff_max_s,
+            )
+        ),
         training=training,
         estop=estop,
         promoter=promoter,
@@ -139,18 +178,23 @@ def create_app(
     app = FastAPI(
         title="Proxima console",
         version=__version__,
+        description=API_DESCRIPTION,
         lifespan=lifespan,
         openapi_url=None,
         docs_url=None,
         redoc_url=None,
     )
     app.state.console = console
+    install_error_handlers(app)
     for router in ROUTERS:
         app.include_router(router, prefix="/api")
+    app.include_router(view.router)
 
     static = settings.static_dir()
     if (static / "index.html").is_file():
-        app.mount("/", StaticFiles(directory=static, html=True), name="static")
+        app.router.routes.append(
+            FrontendMount("/", app=StaticFiles(directory=static, html=True), name="static")
+        )
     else:
 
         @app.get("/", include_in_schema=False)

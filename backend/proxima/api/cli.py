@@ -26,11 +26,14 @@ def serve(
     view: Annotated[bool | None, typer.Option(help="serve the 3D view (viser)")] = None,
 ) -> None:
     """Serve the operator console. Log in with PROXIMA_ADMIN_USER / PROXIMA_ADMIN_PASSWORD
-    (first start), or with the one-time password printed at first start."""
-    import uvicorn
+    (first start), or with the one-time password printed at first start. SIGINT, SIGTERM
+    and SIGHUP stop it and every process it started."""
+    import signal
+
     from rich.console import Console
 
     from proxima.api.runtime import build_runtime
+    from proxima.api.server import ForegroundServer, StopSignals
     from proxima.settings import Settings, SettingsError
 
     out = Console(stderr=True)
@@ -50,14 +53,22 @@ def serve(
     except SettingsError as exc:
         out.print(f"[red]error:[/red] {exc}")
         raise typer.Exit(2) from None
-    runtime = build_runtime(settings, engine=engine, drones=drones, view=view)
     s = settings.server
-    out.print(f"Proxima console: http://{s.host}:{s.port}/")
-    if runtime.view is not None:
-        out.print(f"3D view:         http://{runtime.view.host}:{runtime.view.port}/")
-    for note in runtime.notes:
-        out.print(f"[yellow]note:[/yellow] {note}")
-    try:
-        uvicorn.run(runtime.app, host=s.host, port=s.port, log_level="warning")
-    finally:
-        runtime.close()
+    with StopSignals() as signals:  # from here on, a signal stops what was started
+        runtime = build_runtime(settings, engine=engine, drones=drones, view=view)
+        try:
+            url = f"{'https' if s.tls else 'http'}://{s.host}:{s.port}/"
+            out.print(f"Proxima console: {url}")
+            if runtime.view is not None:
+                out.print(f"3D view:         {url}viser/ (through the console, same login)")
+            for note in runtime.notes:
+                out.print(f"[yellow]note:[/yellow] {note}")
+            console_server = ForegroundServer(runtime.app, s.host, s.port, s)
+            signals.on_stop = console_server.stop
+            if signals.received is None:  # else a signal came while starting: stop now
+                console_server.run()
+        finally:
+            out.print("stopping: federated runner, engine, drone links, 3D view ...")
+            runtime.close()
+    if signals.received is not None:
+        out.print(f"stopped on {signal.Signals(signals.received).name}.")

@@ -23,12 +23,23 @@ class TrainingRunner(Protocol):
         """The parameters of a run for every field its request leaves out."""
         ...
 
+    @property
+    def clients(self) -> list[str]:
+        """The drones (federated clients) a run trains on; `min_clients` may not exceed
+        their number."""
+        ...
+
     def start_run(self, params: dict[str, Any]) -> str:
         """Start a run with these parameters; returns its id at once (runs in background).
 
         Raises:
-            ValueError: a bad parameter (named).
+            ValueError: a bad parameter (named), e.g. more `min_clients` than `clients`.
+            RuntimeError: a run is already in progress.
         """
+        ...
+
+    def cancel_run(self, run_id: str) -> bool:
+        """Ask run `run_id` to stop (it ends as `stopped`); False if it is not running."""
         ...
 
     def list_runs(self) -> list[dict[str, Any]]:

@@ -47,21 +47,25 @@ class ConsoleRuntime:
     notes: list[str] = field(default_factory=list)
 
     def close(self) -> None:
+        """Stop every part, Flower's processes first; a part that fails to stop is logged
+        and the others are stopped all the same."""
+        steps: list[tuple[str, Any]] = []
         if self.training is not None:
-            self.training.close()
+            steps.append(("federated runner", self.training.close))
         if self.engine is not None:
-            self.engine.stop()
+            steps.append(("live engine", self.engine.stop))
         if self.drones is not None:
-            self.drones.close()
+            steps.append(("drone controller", self.drones.close))
         if self.links:
-            from proxima.sim.registry import unregister_vehicle
-
-            for name in self.links:
-                unregister_vehicle(name)
-        for link in self.links.values():
-            link.close()
+            steps.append(("simulated cameras", lambda: _unregister_cameras(self.links)))
+        steps += [(f"drone link {name}", link.close) for name, link in self.links.items()]
         if self.view is not None:
-            self.view.stop()
+            steps.append(("3D view", self.view.stop))
+        for what, stop in steps:
+            try:
+                stop()
+            except Exception:
+                log.exception("could not stop the %s", what)
 
     def restart_engine(self) -> Engine:
         """Stop the live engine and start a fresh one on the same streams (new stream
@@ -242,3 +246,11 @@ def build_runtime(
         live=live,
     )
     return rt
+
+
+def _unregister_cameras(links: dict[str, Any]) -> None:
+    """Forget the drones' cameras `sim:SCENE#NAME` streams looked through."""
+    from proxima.sim.registry import unregister_vehicle
+
+    for name in links:
+        unregister_vehicle(name)

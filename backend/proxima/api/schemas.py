@@ -5,9 +5,9 @@ registry: `python -m proxima.api.typegen` writes `frontend/src/types.gen.js`."""
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from proxima.api.live import LiveCommand, StreamLive
 from proxima.api.recorder import MAX_COUNTDOWN_S, MAX_FRAMES
@@ -22,6 +22,34 @@ from proxima.federated.config import (
     Rounds,
     Strategy,
 )
+from proxima.settings import MIN_PASSWORD_LENGTH, WELL_KNOWN_PASSWORDS, check_password_strength
+from proxima.types import GESTURES
+
+# One of the 13 gestures, as an enum in the schema.
+GestureName = Literal[GESTURES]  # type: ignore[valid-type]
+
+
+def _strong(password: str) -> str:
+    check_password_strength(password)
+    return password
+
+
+# A new password: long enough and not a well-known one (compared case-insensitively; the
+# schema lists the long well-known ones, so a client can check before sending).
+NewPassword = Annotated[
+    str,
+    Field(
+        min_length=MIN_PASSWORD_LENGTH,
+        max_length=256,
+        description=f"at least {MIN_PASSWORD_LENGTH} characters, not a well-known password",
+        json_schema_extra={
+            "not": {
+                "enum": sorted(p for p in WELL_KNOWN_PASSWORDS if len(p) >= MIN_PASSWORD_LENGTH)
+            }
+        },
+    ),
+    AfterValidator(_strong),
+]
 
 
 class _In(BaseModel):
@@ -47,13 +75,13 @@ class LoginResponse(BaseModel):
 
 
 class PasswordChange(_In):
-    old_password: str
-    new_password: str = Field(min_length=1, max_length=256)
+    old_password: str = Field(max_length=256)
+    new_password: NewPassword
 
 
 class UserCreate(_In):
     username: str = Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.@-]+$")
-    password: str = Field(min_length=1, max_length=256)
+    password: NewPassword
     role: Literal["supervisor", "viewer"]
 
 
@@ -100,7 +128,7 @@ class RecordingRequest(_In):
     stream: str
     frames: int = Field(60, ge=1, le=MAX_FRAMES)
     countdown_s: float = Field(3.0, ge=0, le=MAX_COUNTDOWN_S)
-    label: str | None = None
+    label: GestureName | None = None
 
 
 class SampleOut(BaseModel):
@@ -124,8 +152,11 @@ class SampleDetail(SampleOut):
 
 
 class SampleReview(_In):
+    """Keep a sample (with a gesture label, or the label it was recorded with) or delete
+    it; keeping one that has no label and gets none answers 409."""
+
     status: Literal["kept", "deleted"]
-    label: str | None = None
+    label: GestureName | None = None
 
 
 class TrainingStart(_In):
@@ -151,3 +182,28 @@ TRAINING_FORM: tuple[str, ...] = tuple(TrainingStart.model_fields)
 
 class EstopConfirm(_In):
     confirmation_id: str = Field(min_length=1, max_length=128)
+
+
+class RunRef(BaseModel):
+    id: str
+
+
+class AuditEntryOut(BaseModel):
+    """One row of the audit log."""
+
+    id: int
+    ts: float = Field(description="unix time")
+    actor: str = Field(description="the user name (for a failed login: the name tried)")
+    action: str = Field(description="area.verb: auth.login, drone.stop, model.promote, ...")
+    target: str = Field(description="what it was done to: a drone, model, run, sample, user")
+    outcome: Literal["ok", "refused", "failed"]
+    client: str = Field(description="the client's address")
+    detail: dict[str, Any]
+
+
+class AuditPage(BaseModel):
+    """Audit rows, newest first; pass `next_before_id` as `before_id` for the next page
+    (None: this was the last)."""
+
+    entries: list[AuditEntryOut]
+    next_before_id: int | None

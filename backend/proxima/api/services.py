@@ -9,10 +9,12 @@ from typing import Any
 from sqlalchemy import Engine as DbEngine
 from sqlalchemy.orm import sessionmaker
 
+from proxima.api.audit import Audit
 from proxima.api.hub import WebSocketHub
 from proxima.api.interfaces import EmergencyStop, ModelPromoter, TrainingRunner
 from proxima.api.live import LiveState
 from proxima.api.recorder import SampleRecorder
+from proxima.api.throttle import LoginThrottle
 from proxima.events import EventBus
 from proxima.settings import Settings
 
@@ -26,10 +28,14 @@ class Console:
     hub: WebSocketHub
     live: LiveState
     recorder: SampleRecorder
+    audit: Audit
+    throttle: LoginThrottle
     training: TrainingRunner | None = None
     estop: EmergencyStop | None = None
     promoter: ModelPromoter | None = None
-    viz_port: int | None = None  # the viser server's port when one runs
+    # The viser server's port on viser_host when one runs: only the console's /viser/
+    # proxy connects to it; browsers are never told.
+    viz_port: int | None = None
 
     @cached_property
     def command_log(self) -> Any:

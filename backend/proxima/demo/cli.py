@@ -36,7 +36,9 @@ def demo(
         typer.Option("--sim", help="the closed-loop simulator: config/demo-sim.toml (docs/sim.md)"),
     ] = False,
     port: Annotated[int | None, typer.Option(help="console HTTP port (0: any free)")] = None,
-    view_port: Annotated[int | None, typer.Option(help="3D view port (0: any free)")] = None,
+    view_port: Annotated[
+        int | None, typer.Option(help="viser's own port on 127.0.0.1 (0: any free)")
+    ] = None,
     db: Annotated[Path | None, typer.Option(help="SQLite database of the console")] = None,
     checkpoint: Annotated[Path | None, typer.Option(help="gesture model")] = None,
     view: Annotated[bool, typer.Option(help="serve the 3D view (viser)")] = True,
@@ -48,12 +50,12 @@ def demo(
     """Start the whole system on its embedded default: a simulated drone per configured
     udpin:127.0.0.1 drone, one replayed camera stream per drone playing the demo script
     in a loop, the console and the 3D view; with --sim, each drone's camera sees the
-    simulated operator instead. Ctrl-C (or SIGTERM) stops every part."""
+    simulated operator instead. Ctrl-C (or SIGTERM, SIGHUP) stops every part."""
     import os
-    import signal
 
     from rich.console import Console
 
+    from proxima.api.server import StopSignals
     from proxima.demo.runner import Demo
     from proxima.demo.streams import DemoStreamError, ensure_replays
     from proxima.gesture.clip import DataError
@@ -101,26 +103,22 @@ def demo(
             out.print(f"stream {s.name}: {s.uri} (simulated camera of drone {s.drone})")
 
     runner = Demo(settings, log_dir, say=lambda text: out.print(text))
-
-    def on_signal(signum: int, _frame: object) -> None:
-        runner.stop_requested.set()
-
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, on_signal)
     code = 0
-    try:
-        runner.start()
-        if not runner.stop_requested.is_set():
-            _announce(out, settings, runner, os.environ)
-            runner.wait()
-    except Exception as exc:
-        err.print(f"[red]error:[/red] {type(exc).__name__}: {exc}")
-        code = 1
-    finally:
-        out.print("stopping: engine, console, 3D view, drone links, simulators ...")
-        codes = runner.stop()
-        shown = ", ".join(f"{name} exit {c}" for name, c in codes.items()) or "none"
-        out.print(f"stopped (simulators: {shown}).")
+    # SIGINT, SIGTERM and SIGHUP only ask the demo to stop, until everything is stopped.
+    with StopSignals(lambda _signum: runner.stop_requested.set()):
+        try:
+            runner.start()
+            if not runner.stop_requested.is_set():
+                _announce(out, settings, runner, os.environ)
+                runner.wait()
+        except Exception as exc:
+            err.print(f"[red]error:[/red] {type(exc).__name__}: {exc}")
+            code = 1
+        finally:
+            out.print("stopping: engine, console, 3D view, drone links, simulators ...")
+            codes = runner.stop()
+            shown = ", ".join(f"{name} exit {c}" for name, c in codes.items()) or "none"
+            out.print(f"stopped (simulators: {shown}).")
     raise typer.Exit(code)
 
 
@@ -133,7 +131,7 @@ def _announce(out: Console, settings: Settings, runner: Demo, env: Mapping[str, 
     say(f"Proxima demo is running ({len(runner.sims)} simulated drones).")
     say(f"  console:  {url}/")
     if rt.view is not None:
-        say(f"  3D view:  http://{rt.view.host}:{rt.view.port}/")
+        say(f"  3D view:  {url}/viser/ (through the console, same login)")
     say(f"  health:   {url}/api/health")
     user = env.get("PROXIMA_ADMIN_USER")
     if user:

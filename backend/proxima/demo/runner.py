@@ -8,7 +8,7 @@
     console             the web app and WebSocket hub (uvicorn on a thread), the live
                         engine, drone links and controller, the 3D view (viser)
 
-SIGINT (Ctrl-C) and SIGTERM stop everything in order: the engine, the console, the
+SIGINT (Ctrl-C), SIGTERM and SIGHUP stop everything in order: the engine, the console, the
 links, then each simulator by its PID (SIGTERM, SIGKILL after a timeout). Simulators
 run in their own session, so a Ctrl-C in the terminal reaches only the demo, which
 stops them itself; on Linux the kernel also sends them SIGTERM if the demo dies.
@@ -82,7 +82,7 @@ class Demo:
         self.say("starting the console, the live engine and the 3D view ...")
         self.runtime = build_runtime(self.settings, bus=EventBus(), realtime=True)
         s = self.settings.server
-        self.server = BackgroundServer(self.runtime.app, host=s.host, port=s.port).start()
+        self.server = BackgroundServer(self.runtime.app, host=s.host, port=s.port, server=s).start()
         self._loop_thread = threading.Thread(target=self._loop, name="demo-loop", daemon=True)
         self._loop_thread.start()
         return self

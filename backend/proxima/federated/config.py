@@ -32,7 +32,7 @@ APP_DIR = Path(__file__).resolve().parent / "flower-app"
 Rounds = Annotated[int, Field(ge=1, le=500, description="federated rounds")]
 LocalEpochs = Annotated[int, Field(ge=1, le=100, description="epochs each drone trains a round")]
 BatchSize = Annotated[int, Field(ge=1, le=4096, description="local batch size")]
-LearningRate = Annotated[float, Field(gt=0, le=1, description="local learning rate")]
+LearningRate = Annotated[float, Field(ge=1e-6, le=1, description="local learning rate")]
 FractionFit = Annotated[float, Field(gt=0, le=1, description="share of drones asked per round")]
 MinClients = Annotated[int, Field(ge=1, le=100, description="drones a round waits for")]
 Positive = Annotated[float, Field(gt=0)]

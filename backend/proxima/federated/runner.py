@@ -112,6 +112,14 @@ class FederatedRunner:
             RuntimeError: a run is already in progress.
         """
         cfg = config_from_params(params, self.defaults)
+        fleet = len(self._drones) if self._drones else cfg.num_drones
+        if self.flower_runtime == "deployment" and not self._drones:
+            fleet = self.defaults.num_drones  # the default fleet is started once, so fixed
+        if cfg.min_clients > fleet:
+            raise ValueError(
+                f"run config 'min-clients': {cfg.min_clients} is more than the {fleet} "
+                "drones of this federation"
+            )
         with self._lock:
             if self._thread is not None and self._thread.is_alive():
                 raise RuntimeError(f"run {self._active} is still in progress")
@@ -130,6 +138,21 @@ class FederatedRunner:
             self._thread.start()
         self._publish_run(cfg.run_id)
         return cfg.run_id
+
+    @property
+    def clients(self) -> list[str]:
+        """The drones a deployment run trains on (the configured ones, else the default
+        fleet of `defaults.num_drones`)."""
+        drones = self._drones or default_drones(self.defaults.num_drones)
+        return [d.name for d in drones]
+
+    def cancel_run(self, run_id: str) -> bool:
+        """Ask run `run_id` to stop if it is the one in progress (it ends as `stopped`)."""
+        with self._lock:
+            if self._active != run_id or not self.running:
+                return False
+            self._stop.set()
+            return True
 
     def list_runs(self) -> list[dict[str, Any]]:
         return self.store.list_runs()
@@ -247,6 +270,9 @@ class FederatedRunner:
 
     def _deployment_run(self, cfg: FLConfig) -> None:
         fed = self.ensure_federation()
+        if self._stop.is_set():
+            self._finish(cfg.run_id, "stopped", "stopped by request before it was submitted")
+            return
         flwr_id = fed.submit(cfg)
         self.store.update_run(cfg.run_id, flwr_run_id=flwr_id, started_at=time.time())
         seen, last_state = -1, ("pending", "")

@@ -161,6 +161,19 @@ def close_session(db: Session, token: str) -> None:
         db.commit()
 
 
+def close_other_sessions(db: Session, user: User, keep_token: str) -> int:
+    """Forget every session of `user` but the one of `keep_token` (after a password
+    change, a stolen token stops working); returns how many were closed."""
+    keep = _token_digest(keep_token)
+    rows = db.scalars(
+        select(UserSession).where(UserSession.user_id == user.id, UserSession.token_sha256 != keep)
+    ).all()
+    for row in rows:
+        db.delete(row)
+    db.commit()
+    return len(rows)
+
+
 def count_users(db: Session) -> int:
     return len(db.scalars(select(User.id)).all())
 

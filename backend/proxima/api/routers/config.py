@@ -1,5 +1,5 @@
 """What the browser needs to draw its pages: gesture names, where the 3D view is, the
-user's role, the configured streams and drones."""
+user's role, the configured streams and drones; and the OpenAPI schema."""
 
 from __future__ import annotations
 
@@ -7,10 +7,11 @@ from dataclasses import asdict
 from typing import Any
 
 from fastapi import APIRouter, Request
-from fastapi.openapi.utils import get_openapi
 
+from proxima.api.auth import VIEW_PATH
 from proxima.api.deps import ConsoleDep, CurrentUser
 from proxima.api.interfaces import TrainingRunner
+from proxima.api.openapi import openapi_schema
 from proxima.api.schemas import TRAINING_FORM
 from proxima.federated.config import FLConfig
 from proxima.types import GESTURES
@@ -20,12 +21,19 @@ router = APIRouter(tags=["config"])
 
 def _training_form(runner: TrainingRunner | None) -> dict[str, dict[str, Any]]:
     """The Training page's form: each field's JSON schema (type, bounds, choices, from
-    `FLConfig`) and the runner's default for it."""
+    `FLConfig`) and the runner's default for it; `min_clients` at most the drones of the
+    runner's federation (what the server checks too)."""
     defaults = runner.defaults if runner is not None else FLConfig()
     values = asdict(defaults)
-    return {
+    form = {
         name: {**FLConfig.field_schema(name), "default": values[name]} for name in TRAINING_FORM
     }
+    if runner is not None:
+        fleet = len(runner.clients)
+        bound = form["min_clients"]
+        bound["maximum"] = min(bound.get("maximum", fleet), fleet)
+        bound["default"] = min(bound["default"], fleet)
+    return form
 
 
 @router.get("/config")
@@ -34,7 +42,8 @@ def get_config(user: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
     return {
         "user": {"username": user.username, "role": str(user.role)},
         "gestures": list(GESTURES),
-        "viz_port": console.viz_port,
+        # The 3D view, through the console (one login covers both); None: not running.
+        "view_url": f"{VIEW_PATH}/" if console.viz_port is not None else None,
         "streams": [
             {"name": x.name, "drone": x.drone, "priority": x.priority, "kind": x.kind}
             for x in s.streams
@@ -49,5 +58,4 @@ def get_config(user: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
 @router.get("/openapi.json", include_in_schema=False)
 def openapi(request: Request, _: CurrentUser) -> dict[str, Any]:
     """The API's OpenAPI schema, for logged-in users only."""
-    app = request.app
-    return get_openapi(title=app.title, version=app.version, routes=app.routes)
+    return openapi_schema(request.app)

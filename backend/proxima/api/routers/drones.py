@@ -1,4 +1,5 @@
-"""Drones: configuration, newest telemetry, and the two-step emergency stop."""
+"""Drones: configuration, newest telemetry, and the two-step emergency stop (both steps
+recorded in the audit log)."""
 
 from __future__ import annotations
 
@@ -6,9 +7,11 @@ from typing import Any
 
 from fastapi import APIRouter, HTTPException, status
 
-from proxima.api.deps import ConsoleDep, CurrentUser, SupervisorUser
+from proxima.api.deps import AuditDep, ConsoleDep, CurrentUser, SupervisorUser
+from proxima.api.errors import errors
 from proxima.api.schemas import DroneOut, EstopConfirm
 from proxima.api.services import Console
+from proxima.store.audit import AuditAction, AuditOutcome
 
 router = APIRouter(prefix="/drones", tags=["drones"])
 
@@ -71,7 +74,7 @@ def list_drones(_: CurrentUser, console: ConsoleDep) -> list[DroneOut]:
     return drone_list(console)
 
 
-@router.get("/{name}")
+@router.get("/{name}", responses=errors(404))
 def get_drone(name: str, _: CurrentUser, console: ConsoleDep) -> DroneOut:
     for d in drone_list(console):
         if d.name == name:
@@ -79,28 +82,49 @@ def get_drone(name: str, _: CurrentUser, console: ConsoleDep) -> DroneOut:
     raise HTTPException(status.HTTP_404_NOT_FOUND, f"no drone {name!r}")
 
 
-@router.post("/{name}/emergency-stop")
-def request_emergency_stop(name: str, user: SupervisorUser, console: ConsoleDep) -> dict[str, Any]:
+@router.post("/{name}/emergency-stop", responses=errors(404, 503))
+def request_emergency_stop(
+    name: str, user: SupervisorUser, console: ConsoleDep, audit: AuditDep
+) -> dict[str, Any]:
     """Step one: nothing is stopped; returns a confirmation id that expires soon."""
     _known(console, name)
     estop = _estop(console)
     try:
-        return {"drone": name, "confirmed": False, **estop.request(name, user.username)}
+        step = estop.request(name, user.username)
     except KeyError as exc:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no drone {exc}") from None
+    audit(AuditAction.DRONE_STOP_REQUEST, actor=user.username, target=name)
+    return {"drone": name, "confirmed": False, **step}
 
 
-@router.post("/{name}/emergency-stop/confirm")
+@router.post("/{name}/emergency-stop/confirm", responses=errors(404, 409, 503))
 def confirm_emergency_stop(
-    name: str, body: EstopConfirm, user: SupervisorUser, console: ConsoleDep
+    name: str, body: EstopConfirm, user: SupervisorUser, console: ConsoleDep, audit: AuditDep
 ) -> dict[str, Any]:
-    """Step two: with the id from step one, stop the drone."""
+    """Step two: with the id from step one, stop the drone; 409 for a used, wrong or
+    expired id (nothing is sent)."""
     _known(console, name)
     estop = _estop(console)
     try:
         result = estop.confirm(name, body.confirmation_id, user.username)
     except PermissionError as exc:
+        audit(
+            AuditAction.DRONE_STOP,
+            actor=user.username,
+            target=name,
+            outcome=AuditOutcome.REFUSED,
+            reason=str(exc),
+        )
         raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
     except KeyError as exc:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no drone {exc}") from None
+    outcome = AuditOutcome.OK if result.get("ok") else AuditOutcome.FAILED
+    audit(
+        AuditAction.DRONE_STOP,
+        actor=user.username,
+        target=name,
+        outcome=outcome,
+        result=str(result.get("detail", "")),
+        log_id=result.get("log_id"),
+    )
     return {"drone": name, "confirmed": True, **result}

@@ -1,5 +1,5 @@
 """Model checkpoints in models/ (with their model cards), and promoting one into the
-live engine (an explicit supervisor action)."""
+live engine (an explicit supervisor action, recorded in the audit log)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,10 @@ from typing import Any
 
 from fastapi import APIRouter, HTTPException, status
 
-from proxima.api.deps import ConsoleDep, CurrentUser, SupervisorUser
+from proxima.api.deps import AuditDep, ConsoleDep, CurrentUser, SupervisorUser
+from proxima.api.errors import errors
 from proxima.api.services import Console
+from proxima.store.audit import AuditAction, AuditOutcome
 
 router = APIRouter(prefix="/models", tags=["models"])
 
@@ -62,9 +64,12 @@ def list_models(_: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
     }
 
 
-@router.post("/{name:path}/promote")
-def promote(name: str, user: SupervisorUser, console: ConsoleDep) -> dict[str, Any]:
-    """Load this checkpoint into the live engine."""
+@router.post("/{name:path}/promote", responses=errors(404, 409, 503))
+def promote(
+    name: str, user: SupervisorUser, console: ConsoleDep, audit: AuditDep
+) -> dict[str, Any]:
+    """Load this checkpoint into the live engine; 409 when it is not a checkpoint the
+    engine can run (labels, window size)."""
     root = console.settings.server.models_dir
     found = {str(p.relative_to(root)): p for p in checkpoints(console)}
     if name not in found:  # also refuses any path outside models/
@@ -73,8 +78,23 @@ def promote(name: str, user: SupervisorUser, console: ConsoleDep) -> dict[str, A
         raise HTTPException(
             status.HTTP_503_SERVICE_UNAVAILABLE, "no live engine runs in this server to promote to"
         )
+    previous = console.promoter.active_checkpoint()
     try:
         result = console.promoter.promote(str(found[name]))
     except ValueError as exc:
-        raise HTTPException(status.HTTP_422_UNPROCESSABLE_CONTENT, str(exc)) from None
+        audit(
+            AuditAction.MODEL_PROMOTE,
+            actor=user.username,
+            target=name,
+            outcome=AuditOutcome.REFUSED,
+            reason=str(exc),
+        )
+        raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
+    audit(
+        AuditAction.MODEL_PROMOTE,
+        actor=user.username,
+        target=name,
+        previous=previous,
+        pending=result.get("pending"),
+    )
     return {"promoted": name, "by": user.username, **result}

@@ -1,4 +1,5 @@
-"""Labelled samples: record from a stream, review, keep or delete, list."""
+"""Labelled samples: record from a stream, review, keep or delete (recorded in the audit
+log), list."""
 
 from __future__ import annotations
 
@@ -6,10 +7,11 @@ from typing import Annotated
 
 from fastapi import APIRouter, HTTPException, Query, status
 
-from proxima.api.deps import ConsoleDep, CurrentUser, DbDep, SupervisorUser
+from proxima.api.deps import AuditDep, ConsoleDep, CurrentUser, DbDep, SupervisorUser
+from proxima.api.errors import errors
 from proxima.api.schemas import RecordingRequest, SampleDetail, SampleOut, SampleReview
+from proxima.store.audit import AuditAction
 from proxima.store.samples import Sample, SampleStatus, list_samples, review_sample
-from proxima.types import GESTURES
 
 router = APIRouter(prefix="/samples", tags=["samples"])
 
@@ -44,18 +46,17 @@ def get_samples(
     ]
 
 
-@router.post("/recordings", status_code=status.HTTP_202_ACCEPTED)
-def start_recording(body: RecordingRequest, user: SupervisorUser, console: ConsoleDep) -> dict:
+@router.post("/recordings", status_code=status.HTTP_202_ACCEPTED, responses=errors(404, 409))
+def start_recording(
+    body: RecordingRequest, user: SupervisorUser, console: ConsoleDep, audit: AuditDep
+) -> dict:
     """Count down, then record `frames` poses of the stream as a pending sample; progress
-    arrives on the WebSocket as `recording` events and at GET /recordings/{id}."""
+    arrives on the WebSocket as `recording` events and at GET /recordings/{id}. 409 while
+    a recording runs on that stream."""
     try:
         stream = console.settings.stream(body.stream)
     except KeyError:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no stream {body.stream!r}") from None
-    if body.label is not None and body.label not in GESTURES:
-        raise HTTPException(
-            status.HTTP_422_UNPROCESSABLE_CONTENT, f"unknown gesture {body.label!r}"
-        )
     try:
         rec = console.recorder.start(
             stream=stream.name,
@@ -67,10 +68,18 @@ def start_recording(body: RecordingRequest, user: SupervisorUser, console: Conso
         )
     except ValueError as exc:
         raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
+    audit(
+        AuditAction.RECORDING_START,
+        actor=user.username,
+        target=stream.name,
+        recording=rec.id,
+        frames=body.frames,
+        label=body.label,
+    )
     return rec.to_dict()
 
 
-@router.get("/recordings/{recording_id}")
+@router.get("/recordings/{recording_id}", responses=errors(404))
 def get_recording(recording_id: str, _: CurrentUser, console: ConsoleDep) -> dict:
     rec = console.recorder.get(recording_id)
     if rec is None:
@@ -85,7 +94,7 @@ def _sample(db: DbDep, sample_id: int) -> Sample:
     return s
 
 
-@router.get("/{sample_id}")
+@router.get("/{sample_id:int}", responses=errors(404))
 def get_sample(sample_id: int, _: CurrentUser, db: DbDep) -> SampleDetail:
     """A sample with its landmarks, for the skeleton playback."""
     s = _sample(db, sample_id)
@@ -98,12 +107,16 @@ def get_sample(sample_id: int, _: CurrentUser, db: DbDep) -> SampleDetail:
     )
 
 
-@router.patch("/{sample_id}")
-def review(sample_id: int, body: SampleReview, user: SupervisorUser, db: DbDep) -> SampleOut:
-    """Keep (with a gesture label) or delete a sample."""
+@router.patch("/{sample_id:int}", responses=errors(404, 409))
+def review(
+    sample_id: int, body: SampleReview, user: SupervisorUser, db: DbDep, audit: AuditDep
+) -> SampleOut:
+    """Keep (with a gesture label) or delete a sample; 409 to keep one without a label."""
     s = _sample(db, sample_id)
     try:
         review_sample(db, s, status=body.status, label=body.label, by=user.username)
     except ValueError as exc:
-        raise HTTPException(status.HTTP_422_UNPROCESSABLE_CONTENT, str(exc)) from None
+        raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
+    action = AuditAction.SAMPLE_KEEP if body.status == "kept" else AuditAction.SAMPLE_DELETE
+    audit(action, actor=user.username, target=str(s.id), label=s.label, drone=s.drone)
     return _out(s)
