@@ -18,7 +18,13 @@ from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
 # Relative to the repository root; the same names inside proxima/_shipped/.
-SHIPPED_FILES = ("models/gesture-default.pt", "models/gesture-default.md", "config/demo.toml")
+SHIPPED_FILES = (
+    "models/gesture-default.pt",
+    "models/gesture-default.md",
+    "config/demo.toml",
+    "config/demo-sim.toml",
+    "config/scenes/demo.toml",
+)
 STATIC = "static"
 
 

@@ -156,6 +156,8 @@ def test_the_wheel_carries_the_shipped_files(installed: Installed) -> None:
         "proxima/_shipped/models/gesture-default.pt",
         "proxima/_shipped/models/gesture-default.md",
         "proxima/_shipped/config/demo.toml",
+        "proxima/_shipped/config/demo-sim.toml",
+        "proxima/_shipped/config/scenes/demo.toml",
         "proxima/_shipped/static/index.html",
         "proxima/drone/mapping.toml",
         "proxima/federated/flower-app/pyproject.toml",
@@ -169,7 +171,7 @@ def test_the_wheel_carries_the_shipped_files(installed: Installed) -> None:
     # defaults (model, demo settings, console) are the copies inside it.
     probe = (
         "import proxima, proxima.shipped as s\n"
-        "from proxima.demo.commands import DEFAULT_CONFIG\n"
+        "from proxima.demo.cli import DEFAULT_CONFIG\n"
         "from proxima.gesture.classifier import default_checkpoint\n"
         "from proxima.settings import Settings\n"
         "print(s.checkout_root())\n"

@@ -35,10 +35,12 @@ from pydantic_settings import (
 )
 
 from proxima.control.config import ControlSettings
+from proxima.drone.heading import HeadingMode
 from proxima.drone.safety import SafetyConfig
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.federated.settings import TrainingSettings
 from proxima.shipped import STATIC_DIR, shipped_path
+from proxima.sim.mount import CameraMount
 
 log = logging.getLogger(__name__)
 
@@ -85,13 +87,19 @@ class _Section(BaseModel):
 
 
 class DroneSettings(_Section):
-    """One vehicle: its MAVLink connection string and where its home is in the shared
-    world frame (metres, x east, y north, z up), so the 3D view can place several."""
+    """One vehicle: its MAVLink connection string, where its home is in the shared world
+    frame (metres, x east, y north, z up), so the 3D view can place several, which way
+    it points while it flies a move (`proxima.drone.heading`) and its camera (where a
+    `sim:SCENE#NAME` stream sees from, the 3D view's frustum)."""
 
     name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
     connection: str = Field(description="udpin:127.0.0.1:14550, tcp:HOST:PORT, /dev/ttyUSB0")
     sysid: int = Field(1, ge=1, le=255)
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    heading: HeadingMode = Field(
+        "free", description="free (no yaw sent), keep, or face_operator (view.operator_position)"
+    )
+    camera: CameraMount = CameraMount()
 
 
 class ServerSettings(_Section):

@@ -1,5 +1,6 @@
 """Files that ship with Proxima beside its code: the default gesture model and its card,
-the demo's settings and the built console (`static/`).
+the demo's settings (and the closed-loop demo's, with its scene) and the built console
+(`static/`).
 
 In a checkout they lie at the repository root (`models/`, `config/`, `static/`); the
 wheel carries copies inside the package (`proxima/_shipped/`, written by `setup.py`'s
@@ -20,6 +21,7 @@ _REPO = _PACKAGE.parents[1]  # backend/proxima -> the repository root, in a chec
 
 DEFAULT_CHECKPOINT = "models/gesture-default.pt"
 DEMO_CONFIG = "config/demo.toml"
+SIM_DEMO_CONFIG = "config/demo-sim.toml"  # `proxima demo --sim`
 STATIC_DIR = "static"
 
 

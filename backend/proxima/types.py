@@ -54,13 +54,17 @@ class Pose:
 
 @dataclass(frozen=True, eq=False)
 class Frame:
-    """One frame from a source: an image (BGR, HxWx3 uint8) or, for replayed landmark
-    streams, a ready pose and no image. `index` counts frames from 0 in the stream."""
+    """One frame from a source: an image (BGR, HxWx3 uint8); or, for replayed landmark
+    streams, the operator's ready pose and no image; or, for simulated cameras, `poses`:
+    every person the camera sees (possibly none) and no image, among which the engine
+    picks the operator as it does among MediaPipe's people. `index` counts frames from 0
+    in the stream."""
 
     t: float
     index: int
     image: np.ndarray | None = None
     pose: Pose | None = None
+    poses: tuple[Pose, ...] | None = None
 
 
 class StreamState(StrEnum):

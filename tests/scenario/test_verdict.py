@@ -6,6 +6,8 @@ import math
 from typing import Any
 
 from proxima.scenario.verdict import (
+    Verdict,
+    check_geometric_loss,
     collapse_rearms,
     commands_before_arming,
     expected_position,
@@ -134,3 +136,47 @@ def test_expected_position_follows_the_mapping_and_heading() -> None:
     assert expected_position((0, 0, -2), 0.0, ["move_to_left", "move_upward"]) == (0, -1, -3)
     n, e, d = expected_position((0, 0, -2), math.pi / 2, ["move_ahead", "hover"])  # east
     assert abs(n) < 1e-9 and abs(e - 1) < 1e-9 and d == -2
+
+
+def view(t: float, stream: str, framed: bool, height: float) -> dict[str, Any]:
+    return {"t": t, "kind": "view", "stream": stream, "framed": framed,
+            "camera_height_m": height}  # fmt: skip
+
+
+def geometric_flight() -> list[dict[str, Any]]:
+    return [
+        view(0.0, "main", True, 2.5),
+        view(0.0, "secondary", True, 2.5),
+        cmd(18.8, "move_upward", "main"),
+        view(19.5, "main", False, 2.99),
+        handover(20.5, "main", "secondary"),
+    ]
+
+
+def _geometric(timeline: list[dict[str, Any]]) -> Verdict:
+    v = Verdict()
+    check_geometric_loss(v, timeline, "main", "secondary", "move_upward", 2.5, rise_m=0.3)
+    return v
+
+
+def test_the_feet_lost_by_the_climb_pass() -> None:
+    v = _geometric(geometric_flight())
+    assert v.passed, v.reasons
+    assert "lost the feet at t=19.5 s with the camera 2.99 m up" in v.reasons[0]
+
+
+def test_a_loss_before_the_move_or_without_a_climb_fails() -> None:
+    early = geometric_flight()
+    early.insert(2, view(10.0, "main", False, 2.5))
+    assert not _geometric(early).passed
+    low = geometric_flight()
+    low[3] = view(19.5, "main", False, 2.6)  # lost, but the camera had not climbed
+    assert not _geometric(low).passed
+    late = geometric_flight()
+    late[3] = view(21.0, "main", False, 3.0)  # after the handover: not what caused it
+    assert not _geometric(late).passed
+    blind = geometric_flight()
+    blind[1] = view(0.0, "secondary", False, 2.5)  # the secondary did not see the feet
+    v = _geometric(blind)
+    assert not v.passed and "did not frame the operator" in v.reasons[-1]
+    assert not _geometric([e for e in geometric_flight() if e["kind"] != "handover"]).passed

@@ -77,18 +77,20 @@ def test_scene_model_tracks_drones_driving_and_operator(laser_dir) -> None:  # t
     assert op is not None and op.shape[1:] == (2, 3)
     z = op[:, :, 2]
     assert 0.0 <= z.min() < 0.2 and 1.2 < z.max() <= 1.76
-    # The other stream's pose does not move the operator.
-    before = model.version
+    # The other stream's pose does not move the operator; it colours its drone's sight.
+    before = model.snapshot()["operator"]
+    assert model.snapshot()["drones"]["main"]["sight"] == "none"
     model.apply(
         PoseEvent(
             t=5.0,
             stream="front",
             xyz=track.xyz[1].tolist(),
             visibility=track.visibility[1].tolist(),
-            sight="full",
+            sight="partial",
         )
     )
-    assert model.version == before
+    np.testing.assert_array_equal(model.snapshot()["operator"], before)
+    assert model.snapshot()["drones"]["main"]["sight"] == "partial"
 
 
 def test_operator_segments_need_enough_landmarks() -> None:

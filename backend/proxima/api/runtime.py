@@ -56,6 +56,8 @@ class ConsoleRuntime:
             steps.append(("live engine", self.engine.stop))
         if self.drones is not None:
             steps.append(("drone controller", self.drones.close))
+        if self.links:
+            steps.append(("simulated cameras", lambda: _unregister_cameras(self.links)))
         steps += [(f"drone link {name}", link.close) for name, link in self.links.items()]
         if self.view is not None:
             steps.append(("3D view", self.view.stop))
@@ -146,7 +148,9 @@ def federated_drones(settings: Settings) -> list[Any] | None:
 
 def _start_drones(settings: Settings, bus: EventBus, db: DbEngine, rt: ConsoleRuntime) -> Any:
     from proxima.drone.controller import DroneController, EmergencyStopService
+    from proxima.drone.heading import HeadingPolicy
     from proxima.drone.mavlink import MavlinkLink
+    from proxima.sim.registry import register_links
     from proxima.store.command_log import CommandLog
 
     for d in settings.drones:
@@ -156,9 +160,13 @@ def _start_drones(settings: Settings, bus: EventBus, db: DbEngine, rt: ConsoleRu
             link.connect(timeout=10.0)
         except Exception as exc:  # the link keeps trying; its state shows "connecting"
             rt.notes.append(f"drone {d.name}: {exc}")
-    controller = DroneController(rt.links, safety=settings.safety, log=CommandLog(db), bus=bus)
+    heading = HeadingPolicy.from_drones(settings.drones, settings.view.operator_position)
+    controller = DroneController(
+        rt.links, safety=settings.safety, log=CommandLog(db), bus=bus, heading=heading
+    )
     controller.attach(bus)
     rt.drones = controller
+    register_links(rt.links, settings.drones)  # `sim:SCENE#NAME` sees through their cameras
     return EmergencyStopService(controller)
 
 
@@ -238,3 +246,11 @@ def build_runtime(
         live=live,
     )
     return rt
+
+
+def _unregister_cameras(links: dict[str, Any]) -> None:
+    """Forget the drones' cameras `sim:SCENE#NAME` streams looked through."""
+    from proxima.sim.registry import unregister_vehicle
+
+    for name in links:
+        unregister_vehicle(name)

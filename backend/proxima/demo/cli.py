@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from proxima.shipped import DEMO_CONFIG, shipped_path
+from proxima.shipped import DEMO_CONFIG, SIM_DEMO_CONFIG, shipped_path
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from proxima.settings import Settings
 
 DEFAULT_CONFIG = shipped_path(DEMO_CONFIG)
+SIM_CONFIG = shipped_path(SIM_DEMO_CONFIG)
 
 
 def register(app: typer.Typer) -> None:
@@ -27,8 +28,13 @@ def register(app: typer.Typer) -> None:
 
 def demo(
     config: Annotated[
-        Path, typer.Option(help="TOML settings (the console's format)")
-    ] = DEFAULT_CONFIG,
+        Path | None,
+        typer.Option(help="TOML settings (the console's format; default config/demo.toml)"),
+    ] = None,
+    sim: Annotated[
+        bool,
+        typer.Option("--sim", help="the closed-loop simulator: config/demo-sim.toml (docs/sim.md)"),
+    ] = False,
     port: Annotated[int | None, typer.Option(help="console HTTP port (0: any free)")] = None,
     view_port: Annotated[
         int | None, typer.Option(help="viser's own port on 127.0.0.1 (0: any free)")
@@ -43,7 +49,8 @@ def demo(
 ) -> None:
     """Start the whole system on its embedded default: a simulated drone per configured
     udpin:127.0.0.1 drone, one replayed camera stream per drone playing the demo script
-    in a loop, the console and the 3D view. Ctrl-C (or SIGTERM, SIGHUP) stops every part."""
+    in a loop, the console and the 3D view; with --sim, each drone's camera sees the
+    simulated operator instead. Ctrl-C (or SIGTERM, SIGHUP) stops every part."""
     import os
 
     from rich.console import Console
@@ -57,6 +64,10 @@ def demo(
 
     out = Console(soft_wrap=True, highlight=False)
     err = Console(stderr=True, soft_wrap=True)
+    if sim and config is not None:
+        err.print("[red]error:[/red] give --sim or --config, not both")
+        raise typer.Exit(2)
+    config = config or (SIM_CONFIG if sim else DEFAULT_CONFIG)
     try:
         settings = Settings.load(config)
     except SettingsError as exc:
@@ -87,6 +98,9 @@ def demo(
     for f in files:
         made = "stitched now" if f.generated else "existing"
         out.print(f"stream {f.stream}: replay {f.path} (view {f.view or '?'}, {made})")
+    for s in settings.streams:
+        if s.kind == "sim":
+            out.print(f"stream {s.name}: {s.uri} (simulated camera of drone {s.drone})")
 
     runner = Demo(settings, log_dir, say=lambda text: out.print(text))
     code = 0

@@ -3,7 +3,8 @@
     simulated drones    one `proxima sim-drone` process per configured drone whose
                         connection is udpin:127.0.0.1:PORT (taken off to hover)
     camera streams      the configured streams; replayed ones play the demo script in a
-                        loop (a fresh engine starts when every replay has ended)
+                        loop (a fresh engine starts when every replay has ended); sim
+                        ones see the simulated operator from their drone (`--sim`)
     console             the web app and WebSocket hub (uvicorn on a thread), the live
                         engine, drone links and controller, the 3D view (viser)
 
@@ -23,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from proxima.scenario.fleet import SimProcess, start_sim, stop_all, take_off
+from proxima.scenario.fleet import SimProcess, start_sim, stop_all, take_off, turn_to
 from proxima.settings import Settings
 
 LOCAL_UDP = re.compile(r"^udpin:(127\.0\.0\.1|localhost):(?P<port>\d+)$")
@@ -101,17 +102,23 @@ class Demo:
 
         errors: list[str] = []
 
+        facing = {d.name for d in self.settings.drones if d.heading == "face_operator"}
+
         def one(sim: SimProcess) -> None:
             link = MavlinkLink(sim.connection, sim.name)
             try:
                 link.connect(timeout=20.0)
-                take_off(link, HOVER_ALTITUDE_M)
+                tel = take_off(link, HOVER_ALTITUDE_M)
+                if sim.name in facing and tel.position is not None:
+                    turn_to(link, self._bearing_to_operator(sim.name, tel.position))
             except Exception as exc:
                 errors.append(f"{sim.name}: {exc}")
             finally:
                 link.close()
 
         self.say(f"taking off {len(self.sims)} simulated drones to {HOVER_ALTITUDE_M} m ...")
+        if facing:
+            self.say(f"turning {', '.join(sorted(facing))} to face the operator ...")
         threads = [threading.Thread(target=one, args=(sim,)) for sim in self.sims]
         for th in threads:
             th.start()
@@ -119,6 +126,15 @@ class Demo:
             th.join()
         if errors:
             raise RuntimeError("simulated drones not ready: " + "; ".join(errors))
+
+    def _bearing_to_operator(self, name: str, position: tuple[float, float, float]) -> float:
+        """Yaw (radians) from a drone's local position toward `view.operator_position`."""
+        from proxima.drone.heading import HeadingPolicy, bearing
+
+        policy = HeadingPolicy.from_drones(
+            self.settings.drones, self.settings.view.operator_position
+        )
+        return bearing(position, policy.operator_ne[name])
 
     # --- the replay loop -------------------------------------------------------------------
     def _replays_ended(self, engine: Any) -> bool:

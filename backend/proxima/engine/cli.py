@@ -15,7 +15,11 @@ def register(app: typer.Typer) -> None:
 
 def recognize(
     source: Annotated[
-        str, typer.Option(help="webcam:N, file:PATH, rtsp://HOST/PATH or replay:PATH[@FPS]")
+        str,
+        typer.Option(
+            help="webcam:N, file:PATH, rtsp://HOST/PATH, replay:PATH[@FPS] or "
+            "sim:SCENE[?KEY=VALUE&...] (docs/sim.md)"
+        ),
     ],
     events: Annotated[Path, typer.Option(help="write every event here, one JSON per line")],
     checkpoint: Annotated[

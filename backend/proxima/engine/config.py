@@ -12,7 +12,7 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 # The stream URIs `proxima.ingest.open_source` opens (what a spec may name).
-URI_SCHEMES = ("webcam:", "file:", "rtsp://", "rtsps://", "replay:")
+URI_SCHEMES = ("webcam:", "file:", "rtsp://", "rtsps://", "replay:", "sim:")
 NAME_PATTERN = r"^[A-Za-z0-9_.-]+$"
 
 
@@ -25,7 +25,9 @@ class StreamSpec(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     name: str = Field(min_length=1, pattern=NAME_PATTERN)
-    uri: str = Field(description="webcam:N, file:PATH, rtsp://..., replay:PATH[@FPS]")
+    uri: str = Field(
+        description="webcam:N, file:PATH, rtsp://..., replay:PATH[@FPS], sim:SCENE[?...][#DRONE]"
+    )
     drone: str = Field("", description="drone whose camera this is (default: the name)")
     priority: int = Field(0, ge=0, description="0 = main drone, 1 = secondary, ...")
     checkpoint: Path | None = Field(None, description="gesture model (default: the engine's)")
@@ -48,8 +50,11 @@ class StreamSpec(BaseModel):
 
     @property
     def kind(self) -> str:
-        """`replay` for landmark replays (no pixels), `camera` for everything else."""
-        return "replay" if self.uri.startswith("replay:") else "camera"
+        """`replay` for landmark replays (no pixels), `sim` for simulated cameras (no
+        pixels: the people they see), `camera` for everything else."""
+        if self.uri.startswith("replay:"):
+            return "replay"
+        return "sim" if self.uri.startswith("sim:") else "camera"
 
 
 class EngineSettings(BaseModel):

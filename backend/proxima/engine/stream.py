@@ -4,7 +4,9 @@ moving-average filter -> hand evidence, publishing pose, gesture and action even
 Replayed frames carry their pose, so pose estimation and operator tracking are skipped
 for them (the replayed landmarks are used exactly as recorded); camera frames go through
 MediaPipe and the operator tracker, created on the first image so a replay never loads
-MediaPipe. The result of every frame is a `StreamUpdate` for the decision path.
+MediaPipe; a simulated camera's frames list the people it sees (`Frame.poses`) and go
+through the operator tracker only. The result of every frame is a `StreamUpdate` for the
+decision path.
 
 Two hooks let other parts join without touching the pipeline's state from their own
 threads: frame taps (`proxima.engine.taps`) and the classifier swap. A swap is requested
@@ -27,7 +29,7 @@ import logging
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -76,25 +78,40 @@ class ClassifierSwap:
         return self.applied.wait(timeout)
 
 
-class ImagePoseStage:
-    """MediaPipe pose estimation plus operator selection for camera frames."""
+class PoseStage:
+    """The people in a frame -> the operator. Camera images go through MediaPipe (the
+    estimator made on the first image); a simulated camera's frames list their people
+    (`Frame.poses`), so no estimator is made for them. Either way the operator tracker
+    picks and follows the operator among them."""
 
     def __init__(self, model_path: object = None, num_poses: int = 2) -> None:
-        from proxima.pose import OperatorTracker, PoseEstimator
+        from proxima.pose import OperatorTracker
 
-        self.estimator = PoseEstimator(model_path, num_poses=num_poses)  # type: ignore[arg-type]
+        self.model_path = model_path
+        self.num_poses = num_poses
+        self.estimator: Any = None
         self.tracker = OperatorTracker()
 
-    def __call__(self, frame: Frame) -> Pose | None:
+    def people(self, frame: Frame) -> list[Pose]:
+        if frame.poses is not None:
+            return list(frame.poses)
         assert frame.image is not None
-        return self.tracker.update(self.estimator.estimate(frame.image, frame.t), frame.t)
+        if self.estimator is None:
+            from proxima.pose import PoseEstimator
+
+            self.estimator = PoseEstimator(self.model_path, num_poses=self.num_poses)  # type: ignore[arg-type]
+        return self.estimator.estimate(frame.image, frame.t)
+
+    def __call__(self, frame: Frame) -> Pose | None:
+        return self.tracker.update(self.people(frame), frame.t)
 
     @property
     def track_id(self) -> int:
         return self.tracker.track_id
 
     def close(self) -> None:
-        self.estimator.close()
+        if self.estimator is not None:
+            self.estimator.close()
 
 
 class StreamPipeline:
@@ -122,7 +139,7 @@ class StreamPipeline:
         self.evidence = HandEvidence.from_settings(self.control)
         self.frames = 0
         self.classifications = 0
-        self._pose_stage: ImagePoseStage | None = None
+        self._pose_stage: PoseStage | None = None
         self._track_id = 0
         self._lock_request: bool | None = None  # set by the decision path, any thread
         self._lock_guard = threading.Lock()
@@ -185,10 +202,10 @@ class StreamPipeline:
     def _operator_pose(self, frame: Frame) -> Pose | None:
         if frame.pose is not None:
             return frame.pose
-        if frame.image is None:
+        if frame.image is None and frame.poses is None:
             return None
         if self._pose_stage is None:
-            self._pose_stage = ImagePoseStage(self.settings.pose_model, self.settings.num_poses)
+            self._pose_stage = PoseStage(self.settings.pose_model, self.settings.num_poses)
         self._apply_lock_request()
         pose = self._pose_stage(frame)
         if self._pose_stage.track_id != self._track_id:  # another person is the operator

@@ -6,7 +6,9 @@
             ...
 
 URIs: `webcam:N`, `file:PATH` (video), `rtsp://...`, `replay:PATH[@FPS]` (landmark CSV
-in the LASER format, frames carry a `pose` and no image). See docs/ingest-and-pose.md.
+in the LASER format, frames carry a `pose` and no image), `sim:SCENE[?...][#DRONE]` (a
+simulated camera, frames carry every person it sees as `poses`; docs/sim.md). See
+docs/ingest-and-pose.md.
 """
 
 from __future__ import annotations
@@ -46,7 +48,10 @@ __all__ = [
     "write_landmark_csv",
 ]
 
-URI_HELP = "expected webcam:N, file:PATH, rtsp://HOST/PATH or replay:PATH[@FPS]"
+URI_HELP = (
+    "expected webcam:N, file:PATH, rtsp://HOST/PATH, replay:PATH[@FPS] or "
+    "sim:SCENE[?KEY=VALUE&...][#DRONE]"
+)
 
 
 def parse_replay_uri(spec: str) -> tuple[str, float]:
@@ -79,14 +84,15 @@ def open_source(
 ) -> FrameSource:
     """Open the stream `uri` names and return its `FrameSource`.
 
-    `realtime` paces file and replay sources to their timestamps (False: as fast as
-    possible); live sources are always real time. `on_state` receives every
+    `realtime` paces file, replay and sim sources to their timestamps (False: as fast
+    as possible); live sources are always real time. `on_state` receives every
     `StateChange`. `options` go to the source class (e.g. `open_timeout_s`,
     `read_timeout_s`, `policy` for RTSP).
 
     Raises:
         SourceError: unknown URI, missing or non-video file, camera that cannot be
-            opened, or a malformed replay CSV (`LandmarkCsvError`, naming file and line).
+            opened, a malformed replay CSV (`LandmarkCsvError`, naming file and line), or
+            a bad sim URI, scene file or unregistered drone (naming the key or file).
             An unreachable RTSP URL is not raised here: it shows as state `reconnecting`
             and then `ended` with `error` set, and iterating raises `SourceError`.
     """
@@ -97,6 +103,10 @@ def open_source(
     if scheme == "replay":
         path, fps = parse_replay_uri(rest)
         return ReplaySource.from_path(uri, path, fps, realtime=realtime, on_state=on_state)
+    if scheme == "sim":
+        from proxima.sim.source import SimSource
+
+        return SimSource(uri, realtime=realtime, on_state=on_state)
     if scheme == "file":
         from proxima.ingest.video import VideoFileSource
 

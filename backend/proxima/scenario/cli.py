@@ -1,7 +1,7 @@
-"""`proxima scenario paper-flight` and `proxima scenario sim-two-drones`: the paper's
-flights reproduced end to end in simulation, each writing a JSON result and a
-flight-path PNG beside it. Exit code 0 when the verdict passed, 1 when it failed, 2
-when the scenario could not be set up."""
+"""`proxima scenario paper-flight`, `sim-two-drones` and `sim-handover`: the paper's
+flights reproduced end to end in simulation (the last in the closed-loop simulator),
+each writing a JSON result and a flight-path PNG beside it. Exit code 0 when the verdict
+passed, 1 when it failed, 2 when the scenario could not be set up."""
 
 from __future__ import annotations
 
@@ -123,5 +123,66 @@ def sim_two_drones(
         lambda p: run_two_drones(cfg, p),
         json_out,
         "Two simulated drones commanded to their final positions",
+        checkpoint,
+    )
+
+
+@scenario_app.command("sim-handover")
+def sim_handover(
+    json_out: Annotated[Path, typer.Option("--json", help="write the result here (+ .png)")],
+    checkpoint: Annotated[
+        Path | None, typer.Option(help="gesture model (default: models/gesture-default.pt)")
+    ] = None,
+    seed: Annotated[int, typer.Option(help="the scene: bodies, motion, noise")] = 2,
+    altitude: Annotated[float, typer.Option(help="take-off altitude of both drones (m)")] = 2.5,
+    pitch: Annotated[
+        float, typer.Option(help="the main camera's pitch, degrees (down negative)")
+    ] = -8.0,
+    bystanders: Annotated[
+        bool, typer.Option(help="a walker behind the operator and a signaller beside them")
+    ] = True,
+    noise: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=4.0,
+            help="the live pose path's jitter and visibility noise, x the measured",
+        ),
+    ] = 1.0,
+    depth_noise: Annotated[
+        float,
+        typer.Option(
+            min=0.0, max=8.0, help="z's jitter ratio, x the measured (off: see docs/sim.md)"
+        ),
+    ] = 0.0,
+    regain_s: Annotated[
+        float, typer.Option(help="seconds the main camera must see the operator to drive")
+    ] = 8.0,
+    work: Annotated[
+        Path | None, typer.Option(help="keep simulator logs and the command log here")
+    ] = None,
+) -> None:
+    """The paper's handover in the closed-loop simulator: the main drone climbs on
+    move_upward, its camera loses the synthetic operator's feet by geometry, the
+    secondary's camera takes over; have_command and land reach the main drone."""
+    from proxima.scenario.sim_handover import SimHandoverConfig, run_sim_handover
+
+    cfg = SimHandoverConfig(
+        checkpoint=checkpoint,
+        seed=seed,
+        altitude_m=altitude,
+        pitch_deg=pitch,
+        bystanders=bystanders,
+        jitter=noise,
+        visibility_noise=noise,
+        depth_jitter=depth_noise,
+        regain_s=regain_s,
+        work_dir=work,
+    )
+    _run(
+        "sim-handover",
+        lambda p: run_sim_handover(cfg, p),
+        json_out,
+        "Closed-loop handover: the main drone's climb takes the operator's feet out of view",
         checkpoint,
     )

@@ -174,3 +174,26 @@ def wait_gone(pids: Sequence[int], timeout: float) -> list[int]:
         if not left or time.monotonic() > deadline:
             return left
         time.sleep(0.05)
+
+
+def turn_to(link: DroneLink, yaw: float, timeout: float = 10.0) -> Telemetry:
+    """Turn a hovering vehicle to heading `yaw` (radians, clockwise from north) where it
+    is: a position target at its own position with that yaw; waits until within 1 degree.
+
+    Raises:
+        RuntimeError: the vehicle refused the target or did not turn in time.
+    """
+    tel = link.telemetry()
+    if tel is None or tel.position is None:
+        raise RuntimeError(f"{link.name}: no position to turn at")
+    result = link.goto_local(*tel.position, yaw=yaw)
+    if not result.ok:
+        raise RuntimeError(f"{link.name}: turn refused: {result.ack} {result.detail}".strip())
+
+    def there(t: Telemetry) -> bool:
+        return abs((t.yaw - yaw + math.pi) % (2 * math.pi) - math.pi) < math.radians(1.0)
+
+    out = link.wait_for(there, timeout)
+    if out is None:
+        raise RuntimeError(f"{link.name}: did not turn to {math.degrees(yaw):.0f} deg in time")
+    return out

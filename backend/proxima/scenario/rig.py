@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from proxima.drone.controller import DroneController
+from proxima.drone.heading import HeadingPolicy
 from proxima.drone.mavlink import MavlinkLink
 from proxima.drone.safety import SafetyConfig, SafetyGate
 from proxima.events import EventBus
@@ -194,12 +195,16 @@ class Rig:
                 }
             )
 
-    def controller(self, names: Sequence[str], bus: EventBus) -> DroneController:
+    def controller(
+        self, names: Sequence[str], bus: EventBus, heading: HeadingPolicy | None = None
+    ) -> DroneController:
         """A drone controller for `names` on `bus`, its safety rules on the scenario
-        clock, its command log in the work folder."""
+        clock, its command log in the work folder, flying moves with `heading`."""
         log = CommandLog(self.work_dir / f"commands-{'-'.join(names)}.db")
         safety = SafetyGate(SafetyConfig(), clock=self.clock.now)
-        ctl = DroneController({n: self.links[n] for n in names}, safety=safety, log=log, bus=bus)
+        ctl = DroneController(
+            {n: self.links[n] for n in names}, safety=safety, log=log, bus=bus, heading=heading
+        )
         ctl.attach(bus)
         self.controllers.append(ctl)
         return ctl

@@ -245,6 +245,52 @@ def check_hovering_at(
     )
 
 
+def check_geometric_loss(
+    verdict: Verdict,
+    timeline: Sequence[dict[str, Any]],
+    main: str,
+    secondary: str,
+    move: str,
+    altitude_m: float,
+    rise_m: float = 0.5,
+) -> None:
+    """The closed loop's handover came from geometry: the main camera saw the whole
+    operator until `move` was commanded, then lost the feet (a `view` entry, not FULL)
+    with its camera at least `rise_m` above the take-off `altitude_m`, before the
+    handover to `secondary`; and the secondary's camera saw the whole operator when it
+    took over."""
+    cmd = next((c for c in gesture_commands(timeline) if c["command"] == move), None)
+    hand = next((h for h in drone_handovers(timeline) if h["from_stream"] == main), None)
+    views = [e for e in entries(timeline, "view") if e.get("stream") == main]
+    if cmd is None or hand is None:
+        verdict.check(False, "", f"no {move} command or no handover from {main}: nothing to judge")
+        return
+    early = [v for v in views if not v["framed"] and v["t"] < cmd["t"]]
+    lost = next((v for v in views if not v["framed"] and v["t"] >= cmd["t"]), None)
+    height = None if lost is None else lost.get("camera_height_m")
+    verdict.check(
+        not early
+        and lost is not None
+        and height is not None
+        and height >= altitude_m + rise_m
+        and lost["t"] <= hand["t"],
+        f"{main}'s camera framed the operator until {move} (t={cmd['t']} s); it lost the "
+        f"feet at t={lost and lost['t']} s with the camera {height} m up (take-off "
+        f"{altitude_m} m), before the handover at t={hand['t']} s",
+        f"the feet were not lost by geometry: views before {move} {early}, first loss "
+        f"after it {lost}, handover at t={hand['t']} s",
+    )
+    side = [
+        e for e in entries(timeline, "view") if e.get("stream") == secondary and e["t"] <= hand["t"]
+    ]
+    sees = bool(side) and side[-1]["framed"]
+    verdict.check(
+        sees,
+        f"{secondary}'s camera saw the whole operator when it took over",
+        f"{secondary}'s camera did not frame the operator at the handover: {side[-1:]}",
+    )
+
+
 def judge_paper_flight(
     timeline: Sequence[dict[str, Any]],
     main_state: dict[str, Any],

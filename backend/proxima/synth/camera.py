@@ -23,7 +23,7 @@ import numpy as np
 _BODY_TO_OPTICAL = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 
 
-def _rotation_zyx(yaw: float, pitch: float, roll: float) -> np.ndarray:
+def rotation_zyx(yaw: float, pitch: float, roll: float) -> np.ndarray:
     """Body-to-world rotation of aerospace angles (radians): yaw about down, then pitch
     about the new right axis, then roll about the new forward axis."""
     cy, sy = np.cos(yaw), np.sin(yaw)
@@ -68,7 +68,7 @@ class Camera:
 
     def world_to_camera(self) -> np.ndarray:
         """(3, 3) rotation taking world (NED) vectors to optical (right, down, forward)."""
-        r = _rotation_zyx(*np.deg2rad([self.yaw_deg, self.pitch_deg, self.roll_deg]))
+        r = rotation_zyx(*np.deg2rad([self.yaw_deg, self.pitch_deg, self.roll_deg]))
         return _BODY_TO_OPTICAL @ r.T
 
     def to_camera(self, points: np.ndarray) -> np.ndarray:

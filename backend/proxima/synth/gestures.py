@@ -112,10 +112,12 @@ SPECS: dict[str, GestureSpec] = {
         ),
         GestureSpec(
             "have_command",
-            right=ArmMotion(IDLE, arm(plane=75, elevation=125, rotation=0, elbow=30, pronation=0)),
+            right=ArmMotion(IDLE, arm(plane=80, elevation=150, rotation=0, elbow=45, pronation=0)),
             left=ArmMotion(IDLE),
-            period_s=(1.05, 1.6),
-            dwell=(1.3, 2.2),
+            # LASER's raise is a quick flick from a hanging arm: a fast swing with long
+            # pauses at its ends imitates it (the closed-loop simulator, docs/synth.md).
+            period_s=(0.8, 1.1),
+            dwell=(2.0, 3.0),
             handed=True,
             arms="dominant arm; the other hangs",
             plane="forward (sagittal)",

@@ -1,6 +1,8 @@
 """What the 3D view shows, computed from bus events without any rendering library, so
 it can be tested on its own: each drone's world position and trail, which drone drives,
-and the operator's skeleton as 3D line segments.
+the operator's skeleton as 3D line segments, each drone's camera (from its position,
+heading and mount) and how its stream sees the operator (the newest `PoseEvent` sight,
+"none" when its stream has published no pose for `SIGHT_STALE_S`).
 
 World frame: metres, x east, y north, z up, origin at the geofence centre. A drone's
 telemetry is local NED from its own origin, placed in the world by its `home`.
@@ -9,7 +11,9 @@ telemetry is local NED from its own origin, placed in the world by its `home`.
 from __future__ import annotations
 
 import threading
+import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -17,7 +21,11 @@ import numpy as np
 from proxima.drone.events import DroneStateEvent
 from proxima.events import HandoverEvent, PoseEvent
 from proxima.settings import Settings
+from proxima.sim.mount import CameraMount
+from proxima.synth.camera import Camera
 from proxima.types import Event
+
+SIGHT_STALE_S = 1.0  # wall seconds without a pose after which a stream sees nobody
 
 # BlazePose connections drawn for the operator (body only: face and hands omitted).
 BODY_CONNECTIONS: tuple[tuple[int, int], ...] = (
@@ -50,6 +58,15 @@ class DroneTrack:
     link: str = "connecting"
     armed: bool = False
     mode: str = ""
+    attitude: tuple[float, float, float] | None = None  # roll, pitch, yaw (radians)
+    mount: CameraMount = field(default_factory=lambda: CameraMount())
+
+    def camera(self) -> Camera | None:
+        """The drone's camera in the scene's NED frame (None before a position)."""
+        if self.position is None:
+            return None
+        e, n, u = (float(v) for v in self.position)
+        return self.mount.camera((n, e, -u), self.attitude or (0.0, 0.0, 0.0))
 
 
 def ned_to_world(home: np.ndarray, ned: list[float] | tuple[float, float, float]) -> np.ndarray:
@@ -85,13 +102,14 @@ def operator_segments(
 class SceneModel:
     """Scene state, updated by `apply(event)` from any thread; `snapshot()` copies it."""
 
-    def __init__(self, settings: Settings) -> None:
+    def __init__(self, settings: Settings, clock: Callable[[], float] = time.monotonic) -> None:
         self.settings = settings
+        self.clock = clock
         self._lock = threading.Lock()
         self.trail_points = settings.view.trail_points
         self.drones: dict[str, DroneTrack] = {}
         for d in settings.drones:
-            self._add_drone(d.name, d.home)
+            self._add_drone(d.name, d.home).mount = d.camera
         self.stream_drone = {s.name: s.drone for s in settings.streams}
         self.stream_priority = {s.name: s.priority for s in settings.streams}
         self.driving_stream: str | None = None
@@ -99,6 +117,7 @@ class SceneModel:
         self.operator_base = np.array([ox, oy, 0.0])
         self.operator: np.ndarray | None = None
         self.operator_visible = False
+        self.sights: dict[str, tuple[str, float]] = {}  # stream -> (sight, wall time)
         self.version = 0
 
     def _add_drone(self, name: str, home: tuple[float, float, float]) -> DroneTrack:
@@ -131,6 +150,9 @@ class SceneModel:
                     track.link = event.link
                     track.armed = event.armed
                     track.mode = event.mode
+                    if event.attitude is not None and len(event.attitude) == 3:
+                        r, p, y = (float(a) for a in event.attitude)
+                        track.attitude = (r, p, y)
                     if event.position is not None:
                         pos = ned_to_world(track.home, event.position)
                         if track.position is None or np.linalg.norm(pos - track.position) > 0.01:
@@ -139,7 +161,9 @@ class SceneModel:
                 case HandoverEvent():
                     self.driving_stream = event.to_stream or None
                 case PoseEvent():
+                    self.sights[event.stream] = (event.sight, self.clock())
                     if event.stream != self._operator_stream():
+                        self.version += 1
                         return
                     # Seen well enough to read gestures (the watchdog's rule, types.Sight).
                     self.operator_visible = event.sight != "none"
@@ -155,6 +179,20 @@ class SceneModel:
                     return
             self.version += 1
 
+    def drone_sight(self, drone: str) -> str:
+        """How the best of `drone`'s streams sees the operator now: full, partial or none
+        (no pose for `SIGHT_STALE_S`). Call with the lock held."""
+        now = self.clock()
+        best = "none"
+        rank = {"none": 0, "partial": 1, "full": 2}
+        for stream, owner in self.stream_drone.items():
+            if owner != drone or stream not in self.sights:
+                continue
+            sight, at = self.sights[stream]
+            if now - at <= SIGHT_STALE_S and rank.get(sight, 0) > rank[best]:
+                best = sight
+        return best
+
     def snapshot(self) -> dict:
         """A consistent copy for rendering."""
         with self._lock:
@@ -169,6 +207,8 @@ class SceneModel:
                         "armed": t.armed,
                         "mode": t.mode,
                         "home": t.home.copy(),
+                        "camera": t.camera(),
+                        "sight": self.drone_sight(n),
                     }
                     for n, t in self.drones.items()
                 },

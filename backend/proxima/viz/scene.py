@@ -1,5 +1,8 @@
 """The viser server and its scene: geofence cylinder, ground grid, the operator, one
-sphere and trail per drone (the driving drone larger and amber, a lost link red).
+sphere and trail per drone (the driving drone larger and amber, a lost link red), each
+drone's camera frustum and a line of sight from it to the operator coloured by how its
+stream sees them (green full, amber partial, grey none); with a simulated scene in this
+process (`proxima.sim`), the synthetic operator and the bystanders where they stand.
 
 The server listens on 127.0.0.1 by default (its own port); a thread reads the bus and
 redraws at most `view.update_hz` times a second, so the bus never waits on viser.
@@ -8,6 +11,7 @@ redraws at most `view.update_hz` times a second, so the bus never waits on viser
 from __future__ import annotations
 
 import threading
+import time
 from typing import Any
 
 import numpy as np
@@ -15,6 +19,13 @@ import numpy as np
 from proxima.drone.events import DroneStateEvent
 from proxima.events import EventBus, HandoverEvent, PoseEvent
 from proxima.settings import Settings
+from proxima.viz.cameras import (
+    SIGHT_COLORS,
+    frustum_segments,
+    operator_point,
+    scene_people,
+    sight_line,
+)
 from proxima.viz.model import SceneModel
 
 COLORS = {
@@ -25,6 +36,8 @@ COLORS = {
     "operator": (30, 30, 30),
     "operator_lost": (170, 170, 170),
     "fence": (248, 81, 73),
+    "frustum": (88, 166, 255),
+    "bystander": (120, 120, 200),
 }
 VIZ_TYPES = tuple(cls.type for cls in (DroneStateEvent, HandoverEvent, PoseEvent))
 
@@ -114,14 +127,18 @@ class FleetView:
 
     def _run(self) -> None:
         period = 1.0 / self.settings.view.update_hz
+        drawn_at = 0.0
         while not self._stop.is_set():
             event = self._sub.get(timeout=period)
             if event is not None:
                 self.model.apply(event)
                 for e in self._sub.drain():
                     self.model.apply(e)
-            if self.model.version != self._drawn_version:
+            # Redraw on news, and at least once a second: a stream that stopped seeing
+            # the operator publishes nothing, yet its line of sight must turn grey.
+            if self.model.version != self._drawn_version or time.monotonic() - drawn_at > 1.0:
                 self.draw()
+                drawn_at = time.monotonic()
                 self._stop.wait(period)
 
     def draw(self) -> None:
@@ -164,8 +181,23 @@ class FleetView:
                     thickness=3.0,
                     thickness_units="screen",
                 )
+        scene = self._sim_scene()
+        base = self.model.operator_base
+        target = operator_point(scene, (base[0], base[1], 1.0))
+        for name, d in snap["drones"].items():
+            cam = d["camera"]
+            if cam is None:
+                continue
+            self._lines(f"/cameras/{name}/frustum", frustum_segments(cam), COLORS["frustum"], 1.5)
+            self._lines(
+                f"/cameras/{name}/sight", sight_line(cam, target), SIGHT_COLORS[d["sight"]], 3.0
+            )
+        people = scene_people(scene) if scene is not None else []
+        for name, is_operator, segs in people:
+            color = COLORS["operator"] if is_operator else COLORS["bystander"]
+            self._lines(f"/people/{name}", segs, color, 4.0 if is_operator else 2.5)
         op = snap["operator"]
-        if op is not None:
+        if op is not None and not people:
             handle = self._handles.get("/operator/body")
             if handle is not None:
                 handle.remove()
@@ -173,6 +205,22 @@ class FleetView:
             self._handles["/operator/body"] = scene.add_line_segments(
                 "/operator/body", op, colors=color, thickness=4.0, thickness_units="screen"
             )
+
+    def _lines(self, key: str, segs: np.ndarray, color: tuple[int, int, int], width: float) -> None:
+        """Replace the line segments under `key`."""
+        handle = self._handles.get(key)
+        if handle is not None:
+            handle.remove()
+        self._handles[key] = self.server.scene.add_line_segments(
+            key, segs, colors=color, thickness=width, thickness_units="screen"
+        )
+
+    @staticmethod
+    def _sim_scene() -> Any:
+        """The simulated scene of this process, if any camera looked at one."""
+        from proxima.sim.registry import scenes
+
+        return next((s for s in scenes() if s.views()), None)
 
     def stop(self) -> None:
         self._stop.set()

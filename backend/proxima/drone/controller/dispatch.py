@@ -23,6 +23,7 @@ from proxima.drone.controller.execute import CommandExecutor
 from proxima.drone.controller.outcomes import OutcomeTracker
 from proxima.drone.controller.record import CommandContext, CommandRecorder, ControlOutcome
 from proxima.drone.controller.watchdog import Watchdog
+from proxima.drone.heading import HeadingPolicy
 from proxima.drone.link import DroneLink
 from proxima.drone.mapping import CommandMapping, load_mapping
 from proxima.drone.safety import EmergencyStopRequest, SafetyConfig, SafetyGate
@@ -38,7 +39,9 @@ _WorkItem = tuple[CommandEvent, float | None, Future] | tuple[str, bool] | None
 class DroneController:
     """Routes commands for a set of named drones. Call `attach(bus)` to follow the
     engine's events, or `handle(event)` directly (blocking). `clock` (monotonic seconds)
-    times the outcome deadlines; the safety rules keep their own clock."""
+    times the outcome deadlines; the safety rules keep their own clock. `heading` says
+    which way each drone points while it flies a move (`proxima.drone.heading`; default:
+    no yaw sent)."""
 
     def __init__(
         self,
@@ -50,6 +53,7 @@ class DroneController:
         bus: EventBus | None = None,
         arrive_tolerance_m: float = 0.25,
         clock: Callable[[], float] = time.monotonic,
+        heading: HeadingPolicy | None = None,
     ) -> None:
         self.links = dict(links)
         self.mapping = mapping or load_mapping()
@@ -60,7 +64,7 @@ class DroneController:
         self.recorder = CommandRecorder(log, self._publish)
         self.tracker = OutcomeTracker(self.links, self.recorder, speeds, arrive_tolerance_m, clock)
         self.executor = CommandExecutor(
-            self.links, self.mapping, self.safety, self.recorder, self.tracker, speeds
+            self.links, self.mapping, self.safety, self.recorder, self.tracker, speeds, heading
         )
         self.estops = EmergencyStops(self.links, self.safety, self.executor, self.recorder)
         self._confidence: dict[tuple[str, str], float] = {}

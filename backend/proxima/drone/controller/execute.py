@@ -15,6 +15,7 @@ from collections.abc import Mapping
 
 from proxima.drone.controller.outcomes import OutcomeTracker
 from proxima.drone.controller.record import CommandContext, CommandRecorder, ControlOutcome
+from proxima.drone.heading import HeadingPolicy
 from proxima.drone.link import CommandResult, DroneLink, Telemetry
 from proxima.drone.mapping import CommandMapping, MappedAction, MappingError
 from proxima.drone.safety import SafetyGate
@@ -38,8 +39,10 @@ class CommandExecutor:
         recorder: CommandRecorder,
         tracker: OutcomeTracker,
         speeds: dict[str, float],
+        heading: HeadingPolicy | None = None,
     ) -> None:
         self.links = links
+        self.heading = heading or HeadingPolicy()
         self.mapping = mapping
         self.safety = safety
         self.recorder = recorder
@@ -155,7 +158,9 @@ class CommandExecutor:
             result = link.enter_guided()
             if not result.ok:
                 return self.sent(event, ctx, action, result, link, target=target)
-        result = link.goto_local(*target)
+        # The heading flown with the target (None: the autopilot's own; `sent` records it).
+        heading = self.heading.yaw_for(event.drone, tel, target)
+        result = link.goto_local(*target, yaw=heading)
         return self.sent(event, ctx, action, result, link, track="move", target=target)
 
     def sent(
