@@ -181,9 +181,9 @@ class FleetView:
                     thickness=3.0,
                     thickness_units="screen",
                 )
-        scene = self._sim_scene()
+        sim = self._sim_scene()  # the closed-loop simulator's people, when one runs
         base = self.model.operator_base
-        target = operator_point(scene, (base[0], base[1], 1.0))
+        target = operator_point(sim, (base[0], base[1], 1.0))
         for name, d in snap["drones"].items():
             cam = d["camera"]
             if cam is None:
@@ -192,7 +192,7 @@ class FleetView:
             self._lines(
                 f"/cameras/{name}/sight", sight_line(cam, target), SIGHT_COLORS[d["sight"]], 3.0
             )
-        people = scene_people(scene) if scene is not None else []
+        people = scene_people(sim) if sim is not None else []
         for name, is_operator, segs in people:
             color = COLORS["operator"] if is_operator else COLORS["bystander"]
             self._lines(f"/people/{name}", segs, color, 4.0 if is_operator else 2.5)
