@@ -12,14 +12,14 @@ import pytest
 from typer.testing import CliRunner
 
 from proxima.cli import app
+from proxima.evaluation.latency import build_streams
 from proxima.evaluation.robustness import (
     RobustnessConfig,
     RobustnessError,
+    capture_rng,
     captured_stream,
     captured_windows,
-    capture_rng,
 )
-from proxima.evaluation.latency import build_streams
 from proxima.gesture.capture import condition
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
@@ -51,7 +51,7 @@ def test_the_command_writes_the_named_fields_and_a_png(small_run) -> None:
     assert levels[2]["capture"]["jitter"] == pytest.approx(6.4, abs=0.05)
     live = result["live"]
     for name in ("clean", "field"):
-        assert LIVE_KEYS <= set(live[name]), live[name]
+        assert set(live[name]) >= LIVE_KEYS, live[name]
         assert live[name]["expected_commands"] > 0
     assert live["streams"]["count"] == 2 and live["field_condition"]["level"] == 1
     assert live["field"]["fps"][1] <= 30.0

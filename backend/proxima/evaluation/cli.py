@@ -88,8 +88,7 @@ def robustness(
     precision, recall, wrong commands per hour, p95 onset-to-command. Writes the JSON
     and a PNG of accuracy against level beside it."""
     import torch
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
-    from rich.progress import TimeElapsedColumn
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from proxima.evaluation.plots import plot_robustness
     from proxima.evaluation.robustness import (

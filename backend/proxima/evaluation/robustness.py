@@ -49,6 +49,7 @@ from proxima.types import GESTURES
 
 CONDITION_NAMES = (*EFFECTS, "field")  # what `conditions` may name (clean always runs)
 LEVEL_NUMBERS = (1, 2, 3)
+VIEW_KEYS = ("command_precision", "command_recall", "wrong_per_hour", "p95_onset_to_command_s")
 Progress = Callable[[str, int], None]  # (what was done, how many steps) -> None
 
 
@@ -169,9 +170,7 @@ def score_condition(
             if (sel := windows["has_z"] == hz).any()
         ]
     )
-    order = np.concatenate(
-        [np.flatnonzero(windows["has_z"] == hz) for hz in (True, False)]
-    )
+    order = np.concatenate([np.flatnonzero(windows["has_z"] == hz) for hz in (True, False)])
     probs = np.empty((len(order), len(clf.labels)), np.float32)
     probs[order] = predict_proba(clf.model, x)
     full = metrics(windows["labels"], probs, windows["clip"])
@@ -222,7 +221,9 @@ def window_robustness(
 
 
 # -- live -------------------------------------------------------------------------------
-def captured_stream(stream: StitchedStream, model: CaptureModel, rng: np.random.Generator) -> StitchedStream:
+def captured_stream(
+    stream: StitchedStream, model: CaptureModel, rng: np.random.Generator
+) -> StitchedStream:
     """`stream` as a drone camera under `model` would deliver it (one draw for the whole
     stream): the received poses at the drawn frame rate, the script's times unchanged."""
     t = (stream.frames.astype(np.float64) - 1.0) / stream.fps
@@ -301,11 +302,7 @@ def live_robustness(
         out[name] = {
             **command_figures(total),
             "per_view": {
-                v: {
-                    key: command_figures(s)[key]
-                    for key in ("command_precision", "command_recall", "wrong_per_hour",
-                                "p95_onset_to_command_s")
-                }  # fmt: skip
+                v: {key: command_figures(s)[key] for key in VIEW_KEYS}
                 for v, s in sorted(per_view.items())
             },
             "fps": [round(min(fps), 2), round(max(fps), 2)],
