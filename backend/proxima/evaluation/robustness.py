@@ -124,7 +124,8 @@ def captured_windows(
     xyz (N, window, 33, 3), labels, clip index, aspect and has_z per window, subsampled
     evenly to `limit`."""
     batch = _Batch()
-    for repeat in range(config.repeats):
+    # `clean` draws nothing: one repeat is all of it.
+    for repeat in range(1 if name == "clean" else config.repeats):
         for i, clip in enumerate(clips):
             if len(clip) < 2:
                 continue
