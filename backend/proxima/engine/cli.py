@@ -3,14 +3,33 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
+
+if TYPE_CHECKING:
+    from proxima.engine.record import SessionRecorder
+    from proxima.engine.runner import Engine
 
 
 def register(app: typer.Typer) -> None:
     """Add the engine's commands to the `proxima` app."""
     app.command("recognize")(recognize)
+
+
+def _recorder(
+    engine: Engine, folder: Path, fps: float | None, source: str, checkpoint: Path | None
+) -> SessionRecorder:
+    """The session recorder of `--record` (a replay records at its own rate)."""
+    from proxima.engine.record import SessionRecorder
+    from proxima.ingest import DEFAULT_REPLAY_FPS, parse_replay_uri
+
+    if fps is None:
+        fps = DEFAULT_REPLAY_FPS
+        if source.startswith("replay:"):
+            fps = parse_replay_uri(source.removeprefix("replay:"))[1]
+    info = {"command": "proxima recognize", "source": source, "checkpoint": checkpoint}
+    return SessionRecorder(engine, folder, fps, info)
 
 
 def recognize(
@@ -36,10 +55,22 @@ def recognize(
     idle_disarm_s: Annotated[float | None, typer.Option(help="disarm after idle seconds")] = None,
     pose_every: Annotated[int, typer.Option(help="write a pose event every N frames")] = 1,
     pose_model: Annotated[Path | None, typer.Option(help="MediaPipe pose model")] = None,
+    record: Annotated[
+        Path | None,
+        typer.Option(
+            help="record the session here: the operator's poses as a replay CSV "
+            "(NAME.csv), the events (events.jsonl) and session.json with its replay URI"
+        ),
+    ] = None,
+    record_fps: Annotated[
+        float | None,
+        typer.Option(help="frame rate of the recording (default: a replay's own, else 30)"),
+    ] = None,
 ) -> None:
     """Recognise gestures in one stream until it ends (or Ctrl-C) and write every event
     (pose, gesture, action, arming, handover, command, stream) as JSON lines, with `t` in
-    stream seconds. Commands are what would be sent to the drone; nothing is sent."""
+    stream seconds. Commands are what would be sent to the drone; nothing is sent.
+    With --record DIR the session can be replayed: `--source replay:DIR/NAME.csv@FPS`."""
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -68,10 +99,13 @@ def recognize(
     commands: list[CommandEvent] = []
     bus.add_listener(lambda e: commands.append(e) if isinstance(e, CommandEvent) else None)
     engine = Engine([spec], bus, control=control, settings=settings, realtime=realtime)
+    recorder = None
     try:
         writer = JsonlWriter(events, bus)
-    except OSError as exc:
-        console.print(f"[red]error:[/red] cannot write {events}: {exc}")
+        if record is not None:
+            recorder = _recorder(engine, record, record_fps, source, checkpoint)
+    except (OSError, ValueError) as exc:
+        console.print(f"[red]error:[/red] cannot write {record or events}: {exc}")
         raise typer.Exit(2) from None
     stats = engine.stats[name]
     interrupted = False
@@ -105,6 +139,11 @@ def recognize(
         f"{stats.frames} frames, {stats.classifications} classifications, "
         f"{writer.written} events -> {events}"
     )
+    if recorder is not None:
+        session = recorder.close()
+        rec = recorder.recorders[name]
+        console.print(f"recorded {rec.frames} poses -> {rec.path} (replay:{rec.path}@{rec.fps:g}); "
+                      f"{session}")  # fmt: skip
     for c in commands:
         console.print(f"  t={c.t:8.2f}s  {c.command:<15} -> {c.drone} (seen by {c.stream or '-'})")
     if stats.error:

@@ -139,6 +139,7 @@ class StreamPipeline:
         self.evidence = HandEvidence.from_settings(self.control)
         self.frames = 0
         self.classifications = 0
+        self.last_pose: Pose | None = None  # the operator's pose in the latest frame (taps)
         self._pose_stage: PoseStage | None = None
         self._track_id = 0
         self._lock_request: bool | None = None  # set by the decision path, any thread
@@ -226,6 +227,7 @@ class StreamPipeline:
         self.frames += 1
         t = frame.t
         pose = self._operator_pose(frame)
+        self.last_pose = pose
         if pose is None:
             return StreamUpdate(self.name, t, Sight.NONE)
         sight = operator_sight(pose)

@@ -1,6 +1,7 @@
 """`proxima evaluate` (a checkpoint on a split's test windows), `proxima protocols`
 (train and score once per protocol), `proxima model-card` and `proxima stitch` (replay
-streams from dataset clips, with a ground-truth script)."""
+streams from dataset clips, with a ground-truth script), `proxima robustness` (a
+checkpoint under the capture model: windows and live streams)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ def register(app: typer.Typer) -> None:
     """Add the evaluation's commands to the `proxima` app."""
     app.command()(evaluate)
     app.command()(protocols)
+    app.command()(robustness)
     app.command("model-card")(model_card)
     app.command("stitch")(stitch)
 
@@ -54,6 +56,91 @@ def evaluate(
         f"{result['macro_f1']:.3f}, clip accuracy {result['clip_accuracy']:.3f} "
         f"({result['windows']} windows, {result['clips']} clips) -> {json_out}, {png}"
     )
+
+
+def robustness(
+    checkpoint: Annotated[Path, typer.Option(help="Checkpoint from `proxima train`.")],
+    json_out: Annotated[
+        Path, typer.Option("--json", help="Where to write the results (the PNG goes beside).")
+    ],
+    data: DataOpt = None,
+    split: SplitOpt = "temporal",
+    condition: Annotated[
+        list[str] | None,
+        typer.Option(help="Capture condition to run (repeat; default: every effect and field)."),
+    ] = None,
+    repeats: Annotated[int, typer.Option(help="Capture draws per clip and condition.")] = 3,
+    stride: Annotated[int, typer.Option(help="Received poses between test windows.")] = 3,
+    limit: Annotated[
+        int | None, typer.Option(help="At most this many windows per condition (evenly spaced).")
+    ] = None,
+    seed: Annotated[int, typer.Option(help="Seed of every capture draw.")] = 0,
+    live: Annotated[
+        bool, typer.Option(help="Also the live check: stitched streams through the engine.")
+    ] = True,
+    live_streams: Annotated[int, typer.Option(help="Stitched held-out streams.")] = 36,
+    live_segments: Annotated[int, typer.Option(help="Gestures per stream.")] = 20,
+    live_level: Annotated[int, typer.Option(help="Level of the field condition (1-3).")] = 1,
+) -> None:
+    """A checkpoint under the capture model (docs/robustness.md): window accuracy and
+    macro F1 clean, under each capture effect at three levels and under `field`; and
+    stitched held-out streams through the real engine, clean and under `field`: command
+    precision, recall, wrong commands per hour, p95 onset-to-command. Writes the JSON
+    and a PNG of accuracy against level beside it."""
+    import torch
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from proxima.evaluation.plots import plot_robustness
+    from proxima.evaluation.robustness import (
+        CONDITION_NAMES,
+        RobustnessConfig,
+        RobustnessError,
+        markdown_table,
+        run_robustness,
+    )
+    from proxima.gesture.clip import DataError
+
+    torch.set_num_threads(1)
+    try:
+        config = RobustnessConfig(
+            conditions=tuple(condition or CONDITION_NAMES), repeats=repeats, stride=stride,
+            limit=limit, seed=seed, live=live, live_streams=live_streams,
+            live_segments=live_segments, live_level=live_level,
+        )  # fmt: skip
+    except RobustnessError as exc:
+        _fail(exc)
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TimeElapsedColumn())  # fmt: skip
+    with Progress(*columns) as progress:
+        task = progress.add_task("robustness", total=config.steps())
+
+        def step(what: str, n: int) -> None:
+            progress.update(task, advance=n, description=what)
+
+        try:
+            result = run_robustness(checkpoint, data, split, config, step)
+        except (DataError, RobustnessError, ValueError, FileNotFoundError) as exc:
+            _fail(exc)
+    args = [f"--checkpoint {checkpoint}", *[f"--data {d}" for d in data or []],
+            f"--split {split}", f"--json {json_out}"]  # fmt: skip
+    args += [f"--condition {c}" for c in condition or []]
+    defaults = {"repeats": 3, "stride": 3, "limit": None, "seed": 0, "live_streams": 36,
+                "live_segments": 20, "live_level": 1}  # fmt: skip
+    given = {"repeats": repeats, "stride": stride, "limit": limit, "seed": seed,
+             "live_streams": live_streams, "live_segments": live_segments,
+             "live_level": live_level}  # fmt: skip
+    args += [f"--{k.replace('_', '-')} {v}" for k, v in given.items() if v != defaults[k]]
+    if not live:
+        args.append("--no-live")
+    result = {"command": "proxima robustness " + " ".join(args), **result}
+    json_out.parent.mkdir(parents=True, exist_ok=True)
+    json_out.write_text(json.dumps(result, indent=1) + "\n")
+    png = plot_robustness(
+        result, json_out.with_suffix(".png"),
+        f"{checkpoint.name} on {split}: window accuracy under the capture model",
+    )  # fmt: skip
+    typer.echo(markdown_table(result))
+    typer.echo(f"-> {json_out}, {png} ({result['wall_s']} s)")
 
 
 def protocols(

@@ -206,3 +206,29 @@ def plot_temporal_errors(result: dict[str, Any], path: Path) -> None:
     fig.tight_layout(rect=(0, 0.5 / height, 1, 1 - 0.3 / height))  # room: legend, title
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def plot_robustness(result: Mapping[str, Any], path: Path, title: str) -> Path:
+    """Window accuracy against capture level, one line per condition, each from the
+    clean accuracy at level 0; `field` drawn bold."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    clean = result["clean"]["accuracy"]
+    cmap = plt.get_cmap("tab10")
+    for k, (name, levels) in enumerate(result["conditions"].items()):
+        xs = [0] + [r["level"] for r in levels if r["accuracy"] is not None]
+        ys = [clean] + [r["accuracy"] for r in levels if r["accuracy"] is not None]
+        bold = name == "field"
+        ax.plot(xs, ys, marker="o", lw=2.8 if bold else 1.4, label=name,
+                color="k" if bold else cmap(k % 10))  # fmt: skip
+    ax.axhline(clean, color="grey", ls=":", lw=1)
+    ax.set_xticks([0, 1, 2, 3], ["clean", "1", "2", "3"])
+    ax.set_xlabel("capture level (docs/capture.md)")
+    ax.set_ylabel("window accuracy")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=2, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
