@@ -70,11 +70,21 @@ class Tally:
         }
 
 
+def engine_settings(fusion: str, overrule_below: float) -> Any:
+    from proxima.engine.config import EngineSettings
+
+    return EngineSettings(fusion=fusion, fusion_overrule_below=overrule_below)
+
+
 def stitched(
-    checkpoint: Path, seeds: Sequence[int], segments: int, conditions: Sequence[str], log: Log
+    checkpoint: Path,
+    seeds: Sequence[int],
+    segments: int,
+    conditions: Sequence[str],
+    overrule_below: float,
+    log: Log,
 ) -> dict[str, Any]:
     from proxima.control import ControlSettings
-    from proxima.engine.config import EngineSettings
     from proxima.evaluation.fusion import captured, engine_run_views
     from proxima.evaluation.replay import MemoClassifier
     from proxima.evaluation.stitch import random_plan, stitch_views
@@ -103,7 +113,10 @@ def stitched(
                         continue  # one camera: no handover, the same as the default
                     for fusion in ("off", "on"):
                         run = engine_run_views(
-                            [views[v] for v in cams], control, EngineSettings(fusion=fusion), clf
+                            [views[v] for v in cams],
+                            control,
+                            engine_settings(fusion, overrule_below),
+                            clf,
                         )
                         score = run.score(views[cams[0]])
                         acc = run.window_accuracy(views)
@@ -124,6 +137,7 @@ def stitched(
         "seeds": list(seeds),
         "segments_per_stream": segments,
         "conditions": list(conditions),
+        "fusion_overrule_below": overrule_below,
         "controls": {k: v.model_dump() for k, v in controls.items()},
         "results": out,
     }
@@ -144,10 +158,15 @@ def sim_uri(scene: str, bearing_deg: float, depth_noise: float) -> str:
 
 
 def sim(
-    checkpoint: Path, seeds: Sequence[int], segments: int, depth_noises: Sequence[float], log: Log
+    checkpoint: Path,
+    seeds: Sequence[int],
+    segments: int,
+    depth_noises: Sequence[float],
+    overrule_below: float,
+    log: Log,
 ) -> dict[str, Any]:
     from proxima.control import ControlSettings
-    from proxima.engine.config import EngineSettings, StreamSpec
+    from proxima.engine.config import StreamSpec
     from proxima.engine.runner import Engine
     from proxima.evaluation.fusion import ViewsRun
     from proxima.evaluation.replay import MemoClassifier
@@ -187,7 +206,8 @@ def sim(
                     bus.add_listener(run.add)
                     engine = Engine(
                         specs, bus, control=ControlSettings(),
-                        settings=EngineSettings(fusion=fusion), realtime=False, classifier=clf,
+                        settings=engine_settings(fusion, overrule_below), realtime=False,
+                        classifier=clf,
                     )  # fmt: skip
                     if engine.fusion is not None:
                         engine.fusion.listener = run.on_fused
@@ -214,6 +234,7 @@ def sim(
         "cameras": {c: sim_uri("SCENE", b, 0.0) for c, b in SIM_CAMERAS.items()},
         "seeds": list(seeds),
         "segments_per_stream": segments,
+        "fusion_overrule_below": overrule_below,
         "results": out,
     }
 
@@ -249,6 +270,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--sim-seeds", type=int, default=3, help="sim scripts (seeds 0...)")
     ap.add_argument("--sim-segments", type=int, default=12)
     ap.add_argument("--depth-noise", type=float, nargs="+", default=[0.0, 1.0])
+    ap.add_argument(
+        "--overrule-below", type=float, default=0.9, help="EngineSettings.fusion_overrule_below"
+    )
     ap.add_argument("--out", type=Path, default=RESULTS / "fusion.json")
     args = ap.parse_args(argv)
 
@@ -269,11 +293,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     cmd = "python -m bench.fusion " + shlex.join(argv if argv is not None else sys.argv[1:])
     if args.only in (None, "stitched"):
         seeds = range(2000, 2000 + args.seeds)
-        part = stitched(args.checkpoint, seeds, args.segments, args.conditions, log)
+        part = stitched(
+            args.checkpoint, seeds, args.segments, args.conditions, args.overrule_below, log
+        )
         result["stitched"] = {"command": cmd, **part, "seconds": round(time.perf_counter() - t0)}
     if args.only in (None, "sim"):
         t1 = time.perf_counter()
-        part = sim(args.checkpoint, range(args.sim_seeds), args.sim_segments, args.depth_noise, log)
+        part = sim(
+            args.checkpoint, range(args.sim_seeds), args.sim_segments, args.depth_noise,
+            args.overrule_below, log,
+        )  # fmt: skip
         result["sim"] = {"command": cmd, **part, "seconds": round(time.perf_counter() - t1)}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n")

@@ -105,3 +105,10 @@ class EngineSettings(BaseModel):
         description="a window whose arms (shoulders, elbows, wrists) are seen less than this "
         "on average contributes nothing",
     )
+    fusion_overrule_below: float = Field(
+        0.9,
+        gt=0.0,
+        le=1.0,
+        description="the other streams may disagree with a stream's window only while its own "
+        "top probability is below this (1: always); agreeing ones always count",
+    )

@@ -14,7 +14,11 @@ the same labels:
     fused = softmax(sum_i w_i * log_softmax(log p_i / T_i)),   w_i = weight_i / max_j weight_j
 
 (a product of experts, tempered by how well each camera sees the arms: agreeing views
-sharpen, a poorly seen one counts less). The fused vector goes through that stream's own
+sharpen, a poorly seen one counts less). A window that is itself confident (top
+probability at least `fusion_overrule_below`, 0.9) is fused only with the windows that
+agree with its top label: the other cameras may sharpen it but not overrule it, since a
+camera that reads a gesture wrongly is often just as sure (side views under z jitter,
+docs/experiments.md "Fusion"). The fused vector goes through that stream's own
 fused moving-average filter (the same `MovingAverageFilter`, emptied whenever the
 stream's own one is) and the hand evidence, and its action replaces the stream's in the
 update; the controller then does what it always does, so only the driving stream's
@@ -110,11 +114,26 @@ class Fused:
     weights: dict[str, float]
 
 
-def fuse(own: tuple[str, WindowEvidence], others: Sequence[tuple[str, WindowEvidence]]) -> Fused:
+def _top(e: WindowEvidence) -> str:
+    """The window's top label, the thumb gestures counted as one (a window that does not
+    see the hand cannot tell them apart)."""
+    label = e.labels[int(np.argmax(e.probs))]
+    return "thumb" if label in THUMB_GESTURES else label
+
+
+def fuse(
+    own: tuple[str, WindowEvidence],
+    others: Sequence[tuple[str, WindowEvidence]],
+    overrule_below: float = 1.0,
+) -> Fused:
     """Fuse one stream's window with other streams' (see the module). The others must
     have the same labels and a weight > 0; the own window counts only if its weight is
-    > 0, and alone it gives its own probabilities unchanged."""
+    > 0, and alone it gives its own probabilities unchanged. While the own window's top
+    probability reaches `overrule_below`, only the others that agree with its top label
+    count (they may sharpen a confident view, not overrule it)."""
     name, mine = own
+    if mine.weight > 0.0 and float(np.max(mine.probs)) >= overrule_below:
+        others = [(n, e) for n, e in others if _top(e) == _top(mine)]
     parts = [(n, e) for n, e in [own, *others] if e.weight > 0.0]
     if not parts or (len(parts) == 1 and parts[0][0] == name):
         plain = calibrated_log_probs(mine.probs, np.ones(len(mine.labels)))
@@ -191,7 +210,7 @@ class FusedDecisions:
             and e.weight > 0.0
             and e.labels == evidence.labels
         ]
-        fused = fuse((stream, evidence), others)
+        fused = fuse((stream, evidence), others, self.settings.fusion_overrule_below)
         filt = self._filters.get(stream)
         if filt is None or filt.labels != evidence.labels:
             filt = self._filters[stream] = MovingAverageFilter.from_settings(
