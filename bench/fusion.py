@@ -73,7 +73,9 @@ class Tally:
 def engine_settings(fusion: str, overrule_below: float) -> Any:
     from proxima.engine.config import EngineSettings
 
-    return EngineSettings(fusion=fusion, fusion_overrule_below=overrule_below)
+    return EngineSettings.model_validate(
+        {"fusion": fusion, "fusion_overrule_below": overrule_below}
+    )
 
 
 def stitched(

@@ -5,11 +5,12 @@ off, and the priority arbiter still routing every command to the controlled dron
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from proxima.control import ControlSettings, Sight, StreamUpdate
+from proxima.control import ControlSettings, Sight, StreamUpdate, WindowEvidence
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.fusion import ARMS, Fused, FusedDecisions, fuse, window_evidence
 from proxima.evaluation.fusion import engine_run_views
@@ -20,6 +21,7 @@ from proxima.pose import FEET
 from proxima.types import Event
 
 ONES = np.ones(13)
+Clips = dict[tuple[str, str], Clip]
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +32,7 @@ def clf() -> MemoClassifier:
 
 
 @pytest.fixture(scope="module")
-def clips() -> dict[tuple[str, str], Clip]:
+def clips() -> Clips:
     from proxima.gesture.data_source import resolve_dataset
     from proxima.gesture.laser import load_laser_dir
 
@@ -41,7 +43,9 @@ def clips() -> dict[tuple[str, str], Clip]:
     return {(c.gesture, c.view): c for c in loaded}
 
 
-def evidence(clf: MemoClassifier, clip: Clip, start: int, withheld: Sequence[str] = ()):
+def evidence(
+    clf: MemoClassifier, clip: Clip, start: int, withheld: Sequence[str] = ()
+) -> WindowEvidence:
     """The window of `clip` rows start..start+60 as fusion reads it."""
     xyz = clip.xyz[start : start + 60][None].astype(np.float32)
     probs = clf.predict(xyz)[0]
@@ -50,7 +54,9 @@ def evidence(clf: MemoClassifier, clip: Clip, start: int, withheld: Sequence[str
 
 
 @pytest.mark.parametrize(("gesture", "start"), [("move_upward", 570), ("wave_off", 630)])
-def test_two_views_beat_the_better_one_when_one_is_ambiguous(clf, clips, gesture, start):
+def test_two_views_beat_the_better_one_when_one_is_ambiguous(
+    clf: MemoClassifier, clips: Clips, gesture: str, start: int
+) -> None:
     g = clf.labels.index(gesture)
     front = evidence(clf, clips[(gesture, "f")], start)
     left = evidence(clf, clips[(gesture, "l")], start)
@@ -64,7 +70,9 @@ def test_two_views_beat_the_better_one_when_one_is_ambiguous(clf, clips, gesture
     assert fuse(("l", left), [("f", front)], 0.9).probs[g] > front.probs[g]
 
 
-def test_thumb_gestures_are_read_from_the_view_that_sees_the_hand(clf, clips):
+def test_thumb_gestures_are_read_from_the_view_that_sees_the_hand(
+    clf: MemoClassifier, clips: Clips
+) -> None:
     g = clf.labels.index("all_clear")
     front = evidence(clf, clips[("all_clear", "f")], 630)
     left = evidence(clf, clips[("all_clear", "l")], 630, withheld=("all_clear", "not_clear"))
@@ -76,7 +84,9 @@ def test_thumb_gestures_are_read_from_the_view_that_sees_the_hand(clf, clips):
     assert alone.withheld == left.withheld and np.array_equal(alone.probs, left.probs)
 
 
-def test_a_stream_that_does_not_see_the_operator_contributes_nothing(clf, clips):
+def test_a_stream_that_does_not_see_the_operator_contributes_nothing(
+    clf: MemoClassifier, clips: Clips
+) -> None:
     front = evidence(clf, clips[("move_upward", "f")], 570)
     left_clip = clips[("move_upward", "l")]
     hidden = left_clip.visibility[570:630].copy()
@@ -115,7 +125,9 @@ def _script_streams(clips: dict[tuple[str, str], Clip]) -> dict[str, StitchedStr
     return stitch_views(list(clips.values()), plan, ("f", "l"), part="all", seed=1)
 
 
-def test_fusion_off_is_todays_engine_and_one_stream_on_decides_the_same(clf, clips):
+def test_fusion_off_is_todays_engine_and_one_stream_on_decides_the_same(
+    clf: MemoClassifier, clips: Clips
+) -> None:
     streams = _script_streams(clips)
     control = ControlSettings()
     off = engine_run_views([streams["f"]], control, EngineSettings(), clf)
@@ -135,7 +147,9 @@ def test_fusion_off_is_todays_engine_and_one_stream_on_decides_the_same(clf, cli
     assert engine.fusion is None and engine.merge.controller is engine.controller
 
 
-def test_priority_still_routes_every_command_to_the_controlled_drone(clf, clips, tmp_path):
+def test_priority_still_routes_every_command_to_the_controlled_drone(
+    clf: MemoClassifier, clips: Clips, tmp_path: Path
+) -> None:
     """The main camera loses the feet from move_to_left on: the left camera drives, and
     its (fused) commands go to the main drone."""
     streams = _script_streams(clips)
