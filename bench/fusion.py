@@ -84,6 +84,7 @@ def stitched(
     segments: int,
     conditions: Sequence[str],
     overrule_below: float,
+    control_names: Sequence[str],
     log: Log,
 ) -> dict[str, Any]:
     from proxima.control import ControlSettings
@@ -97,7 +98,8 @@ def stitched(
 
     clips = load_laser_dir(resolve_dataset(None))
     clf = MemoClassifier(GestureClassifier.load(checkpoint))
-    controls = {"default": ControlSettings(), "no_rearm": ControlSettings(rearm_on_handover=False)}
+    every = {"default": ControlSettings(), "no_rearm": ControlSettings(rearm_on_handover=False)}
+    controls = {k: every[k] for k in control_names}
     cells: dict[tuple[str, str, str, str], Tally] = {}
     for cond in conditions:
         for seed in seeds:
@@ -113,7 +115,8 @@ def stitched(
                 for cams in SETS:
                     if cname != "default" and len(cams) == 1:
                         continue  # one camera: no handover, the same as the default
-                    for fusion in ("off", "on"):
+                    for fusion in ("off", "on") if len(cams) > 1 else ("off",):
+                        # one camera decides the same with fusion on (tests/engine/test_fusion.py)
                         run = engine_run_views(
                             [views[v] for v in cams],
                             control,
@@ -269,6 +272,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=6, help="stitched scripts (seeds 2000...)")
     ap.add_argument("--segments", type=int, default=30)
     ap.add_argument("--conditions", nargs="+", default=["clean", "field"])
+    ap.add_argument(
+        "--controls", nargs="+", default=["default"], choices=("default", "no_rearm"),
+        help="decision settings: the defaults; no_rearm = rearm_on_handover false",
+    )  # fmt: skip
     ap.add_argument("--sim-seeds", type=int, default=3, help="sim scripts (seeds 0...)")
     ap.add_argument("--sim-segments", type=int, default=12)
     ap.add_argument("--depth-noise", type=float, nargs="+", default=[0.0, 1.0])
@@ -296,8 +303,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.only in (None, "stitched"):
         seeds = range(2000, 2000 + args.seeds)
         part = stitched(
-            args.checkpoint, seeds, args.segments, args.conditions, args.overrule_below, log
-        )
+            args.checkpoint, seeds, args.segments, args.conditions, args.overrule_below,
+            args.controls, log,
+        )  # fmt: skip
         result["stitched"] = {"command": cmd, **part, "seconds": round(time.perf_counter() - t0)}
     if args.only in (None, "sim"):
         t1 = time.perf_counter()
