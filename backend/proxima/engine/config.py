@@ -107,8 +107,8 @@ class EngineSettings(BaseModel):
     )
     fusion_overrule_below: float = Field(
         0.9,
-        gt=0.0,
+        ge=0.0,
         le=1.0,
         description="the other streams may disagree with a stream's window only while its own "
-        "top probability is below this (1: always); agreeing ones always count",
+        "top probability is below this (1: always, 0: never); agreeing ones always count",
     )
