@@ -280,14 +280,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--sim-segments", type=int, default=12)
     ap.add_argument("--depth-noise", type=float, nargs="+", default=[0.0, 1.0])
     ap.add_argument(
-        "--overrule-below", type=float, default=0.9, help="EngineSettings.fusion_overrule_below"
+        "--overrule-below",
+        type=float,
+        default=None,
+        help="EngineSettings.fusion_overrule_below (default: its default)",
     )
     ap.add_argument("--out", type=Path, default=RESULTS / "fusion.json")
     args = ap.parse_args(argv)
 
     import torch
 
+    from proxima.engine.config import EngineSettings
+
     torch.set_num_threads(1)
+    if args.overrule_below is None:
+        args.overrule_below = EngineSettings().fusion_overrule_below
     t0 = time.perf_counter()
 
     def log(msg: str) -> None:

@@ -106,7 +106,7 @@ class EngineSettings(BaseModel):
         "on average contributes nothing",
     )
     fusion_overrule_below: float = Field(
-        0.9,
+        0.0,
         ge=0.0,
         le=1.0,
         description="the other streams may disagree with a stream's window only while its own "

@@ -14,14 +14,14 @@ the same labels:
     fused = softmax(sum_i w_i * log_softmax(log p_i / T_i)),   w_i = weight_i / max_j weight_j
 
 (a product of experts, tempered by how well each camera sees the arms: agreeing views
-sharpen, a poorly seen one counts less). A window that is itself confident (top
-probability at least `fusion_overrule_below`, 0.9) is fused only with the windows that
+sharpen, a poorly seen one counts less). A window whose own top probability reaches
+`fusion_overrule_below` (default 0: every window) is fused only with the windows that
 agree with its top label: the other cameras may sharpen it but not overrule it, since a
 camera that reads a gesture wrongly is often just as sure (side views under z jitter,
-docs/experiments.md "Fusion"). The fused vector goes through that stream's own
-fused moving-average filter (the same `MovingAverageFilter`, emptied whenever the
-stream's own one is) and the hand evidence, and its action replaces the stream's in the
-update; the controller then does what it always does, so only the driving stream's
+docs/experiments.md "Fusion"; 0.9 and 1 gave more wrong commands there). The fused
+vector goes through that stream's own fused moving-average filter (the same
+`MovingAverageFilter`, emptied whenever the stream's own one is) and the hand evidence,
+and its action replaces the stream's in the update; the controller then does what it always does, so only the driving stream's
 action counts and every command goes to the controlled drone.
 
 The thumb gestures (`all_clear`, `not_clear`): a window that does not see the operator's
