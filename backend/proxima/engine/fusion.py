@@ -21,8 +21,9 @@ camera that reads a gesture wrongly is often just as sure (side views under z ji
 docs/experiments.md "Fusion"; 0.9 and 1 gave more wrong commands there). The fused
 vector goes through that stream's own fused moving-average filter (the same
 `MovingAverageFilter`, emptied whenever the stream's own one is) and the hand evidence,
-and its action replaces the stream's in the update; the controller then does what it always does, so only the driving stream's
-action counts and every command goes to the controlled drone.
+and its action replaces the stream's in the update; the controller then does what it
+always does, so only the driving stream's action counts and every command goes to the
+controlled drone.
 
 The thumb gestures (`all_clear`, `not_clear`): a window that does not see the operator's
 hand cannot tell them apart, so when some contributing window does see the hand, the
