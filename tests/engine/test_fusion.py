@@ -22,6 +22,7 @@ from proxima.types import Event
 
 ONES = np.ones(13)
 Clips = dict[tuple[str, str], Clip]
+SHIPPED = EngineSettings().fusion_overrule_below  # agreement only
 
 
 @pytest.fixture(scope="module")
@@ -53,9 +54,10 @@ def evidence(
     return window_evidence(probs, vis, withheld, clf.labels, ONES, 0.5, False)
 
 
+@pytest.mark.parametrize("overrule", [SHIPPED, 0.9, 1.0])
 @pytest.mark.parametrize(("gesture", "start"), [("move_upward", 570), ("wave_off", 630)])
 def test_two_views_beat_the_better_one_when_one_is_ambiguous(
-    clf: MemoClassifier, clips: Clips, gesture: str, start: int
+    clf: MemoClassifier, clips: Clips, gesture: str, start: int, overrule: float
 ) -> None:
     g = clf.labels.index(gesture)
     front = evidence(clf, clips[(gesture, "f")], start)
@@ -63,11 +65,14 @@ def test_two_views_beat_the_better_one_when_one_is_ambiguous(
     assert front.probs.argmax() == g and front.probs[g] > 0.9
     assert left.probs.max() < 0.6  # the left view alone is ambiguous
     best = max(front.probs[g], left.probs[g])
-    for fused in (fuse(("l", left), [("f", front)], 0.9), fuse(("f", front), [("l", left)], 0.9)):
+    for fused in (
+        fuse(("l", left), [("f", front)], overrule),
+        fuse(("f", front), [("l", left)], overrule),
+    ):
         assert int(np.argmax(fused.probs)) == g
         assert fused.probs[g] >= best
     # the ambiguous view's own decision is the sharpened one
-    assert fuse(("l", left), [("f", front)], 0.9).probs[g] > front.probs[g]
+    assert fuse(("l", left), [("f", front)], overrule).probs[g] > front.probs[g]
 
 
 def test_thumb_gestures_are_read_from_the_view_that_sees_the_hand(
@@ -77,7 +82,7 @@ def test_thumb_gestures_are_read_from_the_view_that_sees_the_hand(
     front = evidence(clf, clips[("all_clear", "f")], 630)
     left = evidence(clf, clips[("all_clear", "l")], 630, withheld=("all_clear", "not_clear"))
     assert clf.labels[int(np.argmax(left.probs))] == "not_clear"  # a guess without the hand
-    fused = fuse(("l", left), [("f", front)], 0.9)
+    fused = fuse(("l", left), [("f", front)], SHIPPED)
     assert int(np.argmax(fused.probs)) == g and fused.probs[g] >= front.probs[g]
     assert fused.withheld == ()  # the front camera sees the hand
     alone = fuse(("l", left), [], 0.9)
@@ -187,3 +192,15 @@ def test_priority_still_routes_every_command_to_the_controlled_drone(
         "have_command", "move_upward", "land"
     ]  # fmt: skip
     assert fused_by == {"f", "l"}  # both streams' decisions had the other's evidence
+
+
+def test_a_view_that_disagrees_does_not_overrule_by_default(
+    clf: MemoClassifier, clips: Clips
+) -> None:
+    front = evidence(clf, clips[("move_upward", "f")], 570)
+    other = evidence(clf, clips[("hover", "l")], 300)  # another gesture, read confidently
+    assert clf.labels[int(np.argmax(other.probs))] == "hover" and other.probs.max() > 0.9
+    kept = fuse(("f", front), [("l", other)], SHIPPED)
+    assert list(kept.weights) == ["f"] and np.array_equal(kept.probs, front.probs)
+    mixed = fuse(("f", front), [("l", other)], 1.0)  # without the guard it would count
+    assert list(mixed.weights) == ["f", "l"] and mixed.probs.max() < front.probs.max()
