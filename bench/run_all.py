@@ -67,6 +67,11 @@ BENCHES = (
     ),
     Bench("temporal_errors", "--checkpoint {ckpt} --out {out}/temporal_errors.json"),
     Bench(
+        "fusion",
+        "--checkpoint {ckpt} --seeds 1 --segments 8 --conditions clean --sim-seeds 1 "
+        "--sim-segments 4 --depth-noise 0 --out {out}/fusion.json",
+    ),
+    Bench(
         "federated",
         "--central-checkpoint {ckpt} --rounds 2 --long-rounds 0 --skip-deploy "
         "--out {out}/federated.json",

@@ -31,7 +31,9 @@ def test_every_engine_control_and_safety_parameter_is_set_from_toml(tmp_path: Pa
     changed: dict[str, dict[str, Any]] = {
         "engine": {"checkpoint": "models/other.pt", "stride": 3, "max_gap_s": 0.5,
                    "pose_every": 2, "num_poses": 3, "pose_model": "models/pose.task",
-                   "stale_after_s": 2.0, "torch_threads": 2},
+                   "stale_after_s": 2.0, "torch_threads": 2, "fusion": "on",
+                   "fusion_max_age_s": 0.3, "fusion_min_visibility": 0.6,
+                   "fusion_overrule_below": 0.9},
         "recognition": {"filter_size": 4, "threshold": 0.8,
                         "threshold_by_command": {"wave_off": 0.6}, "confirm": 3,
                         "confirm_by_command": {"land": 7}, "debounce_s": 1.5,

@@ -2,14 +2,20 @@
 priority arbiter across the streams that watch the operator.
 
 Public API: `ControlSettings`, `MovingAverageFilter`, `HandEvidence`, `CommandGate`,
-`Arming`, `PriorityArbiter`, `Sight`, `CommandController`, `StreamUpdate`. Everything runs
+`Arming`, `PriorityArbiter`, `Sight`, `CommandController`, `StreamUpdate`,
+`WindowEvidence`. Everything runs
 on stream time.
 """
 
 from proxima.control.arbiter import Handover, PriorityArbiter, Sight
 from proxima.control.arming import ABORT_GESTURE, ARM_GESTURE, Arming
 from proxima.control.config import ControlSettings
-from proxima.control.controller import SAFE_COMMAND, CommandController, StreamUpdate
+from proxima.control.controller import (
+    SAFE_COMMAND,
+    CommandController,
+    StreamUpdate,
+    WindowEvidence,
+)
 from proxima.control.evidence import HandEvidence
 from proxima.control.gate import CommandGate
 from proxima.control.smoothing import FilteredAction, MovingAverageFilter
@@ -29,4 +35,5 @@ __all__ = [
     "PriorityArbiter",
     "Sight",
     "StreamUpdate",
+    "WindowEvidence",
 ]

@@ -13,6 +13,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from proxima.control.arbiter import Handover, PriorityArbiter, Sight
 from proxima.control.arming import Arming
 from proxima.control.config import ControlSettings
@@ -23,11 +25,28 @@ from proxima.types import Event
 SAFE_COMMAND = "hover"  # sent when armed control loses the operator everywhere
 
 
+@dataclass(frozen=True, eq=False)
+class WindowEvidence:
+    """One classified window as cross-stream fusion reads it (`proxima.engine.fusion`):
+    the classifier's `probs` over `labels`, its calibrated log-probabilities `log_probs`,
+    the stream's `weight` (how well the window sees the operator's arms, 0 = nothing),
+    the gestures the hand evidence `withheld`, and whether the stream's own filter was
+    emptied since its previous window (`restarted`)."""
+
+    labels: tuple[str, ...]
+    probs: np.ndarray
+    log_probs: np.ndarray
+    weight: float
+    withheld: tuple[str, ...] = ()
+    restarted: bool = False
+
+
 @dataclass(frozen=True)
 class StreamUpdate:
     """What one stream knows at stream time `t`: how it sees the operator and, on frames
     where it classified a window, its filtered action ("" = nothing confident; None = no
-    new decision in this frame). `ended` marks the stream's last update."""
+    new decision in this frame). `ended` marks the stream's last update. `evidence` is
+    the classified window for fusion across streams (None when fusion is off)."""
 
     stream: str
     t: float
@@ -35,6 +54,7 @@ class StreamUpdate:
     action: str | None = None
     confidence: float = 0.0
     ended: bool = False
+    evidence: WindowEvidence | None = None
 
 
 class CommandController:

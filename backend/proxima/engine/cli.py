@@ -85,11 +85,13 @@ def recognize(
     try:
         given = {k: v for k, v in overrides.items() if v is not None}
         control = ControlSettings.model_validate(given)
-        settings = EngineSettings(
-            checkpoint=checkpoint,
-            pose_every=pose_every,
-            pose_model=pose_model,
-            **({"stride": stride} if stride is not None else {}),
+        settings = EngineSettings.model_validate(
+            {
+                "checkpoint": checkpoint,
+                "pose_every": pose_every,
+                "pose_model": pose_model,
+                **({"stride": stride} if stride is not None else {}),
+            }
         )
         spec = StreamSpec(name=name, uri=source, drone=drone)
     except ValueError as exc:

@@ -7,7 +7,7 @@ Both models are sections of `proxima.settings.Settings` as they are (`[[streams]
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -86,3 +86,29 @@ class EngineSettings(BaseModel):
         "the time-ordered decisions of the others",
     )
     torch_threads: int = Field(1, ge=1, description="torch threads for inference")
+    fusion: Literal["off", "on"] = Field(
+        "off",
+        description="combine the classified windows of every stream that sees the operator "
+        "(visibility-weighted calibrated log-probabilities; `proxima.engine.fusion`) before "
+        "each stream's filter; the priority arbiter still picks the driving stream",
+    )
+    fusion_max_age_s: float = Field(
+        0.4,
+        gt=0.0,
+        description="another stream's window counts if it ended at most this long before "
+        "(stride 5 is 0.17 s at 30 fps, 0.33 s at 15)",
+    )
+    fusion_min_visibility: float = Field(
+        0.5,
+        ge=0.0,
+        le=1.0,
+        description="a window whose arms (shoulders, elbows, wrists) are seen less than this "
+        "on average contributes nothing",
+    )
+    fusion_overrule_below: float = Field(
+        0.0,
+        ge=0.0,
+        le=1.0,
+        description="the other streams may disagree with a stream's window only while its own "
+        "top probability is below this (1: always, 0: never); agreeing ones always count",
+    )

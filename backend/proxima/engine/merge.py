@@ -18,9 +18,17 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
+from typing import Protocol
 
-from proxima.control import CommandController, StreamUpdate
+from proxima.control import StreamUpdate
 from proxima.types import Event
+
+
+class Decider(Protocol):
+    """The decision path the merge feeds: `CommandController`, or fusion in front of it
+    (`proxima.engine.fusion.FusedDecisions`)."""
+
+    def process(self, update: StreamUpdate) -> list[Event]: ...
 
 
 class TimeOrderedMerge:
@@ -28,7 +36,7 @@ class TimeOrderedMerge:
 
     def __init__(
         self,
-        controller: CommandController,
+        controller: Decider,
         publish: Callable[[Event], None],
         streams: Sequence[str],
         stale_after_s: float = 1.0,

@@ -28,7 +28,8 @@ from pathlib import Path
 
 from proxima.control import CommandController, ControlSettings, Sight, StreamUpdate
 from proxima.engine.config import EngineSettings, StreamSpec
-from proxima.engine.merge import TimeOrderedMerge
+from proxima.engine.fusion import FusedDecisions
+from proxima.engine.merge import Decider, TimeOrderedMerge
 from proxima.engine.stream import Classifier, ClassifierSwap, StreamPipeline
 from proxima.engine.taps import FrameTap, StreamTaps, Tap, UpdateTap
 from proxima.events import ArmingEvent, EventBus, StreamEvent
@@ -100,8 +101,14 @@ class Engine:
         self._default_classifier = classifier
         self._taps = {name: StreamTaps(name) for name in names}
         self.controller = CommandController(names, self.drone, self.control)
+        # With fusion on, every stream's window is fused with the others' before the
+        # controller sees its action (`proxima.engine.fusion`); the arbiter is unchanged.
+        self.fusion: FusedDecisions | None = None
+        decider: Decider = self.controller
+        if self.settings.fusion == "on":
+            decider = self.fusion = FusedDecisions(self.controller, self.control, self.settings)
         self.merge = TimeOrderedMerge(
-            self.controller, self._publish_decision, names, self.settings.stale_after_s
+            decider, self._publish_decision, names, self.settings.stale_after_s
         )
         self.stats = {name: StreamStats() for name in names}
         self.pipelines: dict[str, StreamPipeline] = {}

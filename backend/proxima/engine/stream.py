@@ -41,6 +41,7 @@ from proxima.control import (
     StreamUpdate,
 )
 from proxima.engine.config import EngineSettings, StreamSpec
+from proxima.engine.fusion import temperature, window_evidence
 from proxima.engine.taps import StreamTaps
 from proxima.engine.window import PoseWindow
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
@@ -137,6 +138,8 @@ class StreamPipeline:
         self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
         self.filter = MovingAverageFilter.from_settings(self.control, classifier.labels)
         self.evidence = HandEvidence.from_settings(self.control)
+        self._temperature = temperature(classifier, classifier.labels)
+        self._restarted = True  # the filter was emptied since the last window (fusion)
         self.frames = 0
         self.classifications = 0
         self.last_pose: Pose | None = None  # the operator's pose in the latest frame (taps)
@@ -180,6 +183,8 @@ class StreamPipeline:
             self.window = PoseWindow(clf.window, self.settings.stride, self.settings.max_gap_s)
         self.filter = MovingAverageFilter.from_settings(self.control, clf.labels)
         self._classifier = clf
+        self._temperature = temperature(clf, clf.labels)
+        self._restarted = True
         swap.t = t
         swap.applied.set()
         log.info("stream %s: classifier swapped (window %d) at t=%s", self.name, clf.window, t)
@@ -213,6 +218,7 @@ class StreamPipeline:
             self._track_id = self._pose_stage.track_id
             self.window.clear()
             self.filter.reset()
+            self._restarted = True
         return pose
 
     def process(self, frame: Frame) -> StreamUpdate:
@@ -243,6 +249,7 @@ class StreamPipeline:
             )
         if self.window.push(pose):
             self.filter.reset()
+            self._restarted = True
         if not self.window.due():
             return StreamUpdate(self.name, t, sight)
         xyz, vis = self.window.take()
@@ -273,7 +280,14 @@ class StreamPipeline:
                 confidence=round(decision.confidence, 4),
             )
         )
-        return StreamUpdate(self.name, t, sight, action, decision.confidence)
+        fused = None
+        if self.settings.fusion == "on":
+            fused = window_evidence(
+                probs, vis[0], withheld, classifier.labels, self._temperature,
+                self.settings.fusion_min_visibility, self._restarted,
+            )  # fmt: skip
+        self._restarted = False
+        return StreamUpdate(self.name, t, sight, action, decision.confidence, evidence=fused)
 
     def close(self) -> None:
         """Release the pose estimator, if one was made; later swaps apply at once."""
