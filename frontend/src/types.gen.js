@@ -15,6 +15,7 @@ export const MESSAGE_TYPES = Object.freeze([
   "training_run",
   "recording",
   "thumbnail",
+  "model",
 ]);
 
 /**
@@ -36,6 +37,7 @@ export const MESSAGE_TYPES = Object.freeze([
  *   "training_run": TrainingRunEvent & Stamped,
  *   "recording": RecordingEvent & Stamped,
  *   "thumbnail": ThumbnailEvent & Stamped,
+ *   "model": ModelEvent & Stamped,
  * }} MessageMap
  */
 /** @typedef {MessageMap[keyof MessageMap]} Message */
@@ -199,6 +201,19 @@ export const MESSAGE_TYPES = Object.freeze([
  */
 
 /**
+ * The live engine's model changed: `action` is promote, rollback or restore (at
+ * start, the model promoted before the restart); `checkpoint` is its name in models/.
+ * @typedef {object} ModelEvent
+ * @property {number} t
+ * @property {string} stream
+ * @property {"model"} type
+ * @property {string} checkpoint
+ * @property {string} previous
+ * @property {string} action
+ * @property {string} by
+ */
+
+/**
  * @typedef {object} PasswordChange
  * @property {string} old_password
  * @property {string} new_password at least 10 characters, not a well-known password
@@ -213,6 +228,13 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {number[][]} xyz
  * @property {number[]} visibility
  * @property {string} sight
+ */
+
+/**
+ * A promotion's override: needed (non-empty) when the candidate is below the minimum
+ * accuracy or the model in use on the held-out set.
+ * @typedef {object} PromoteRequest
+ * @property {string | null} [override_reason]
  */
 
 /**

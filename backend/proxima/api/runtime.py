@@ -205,6 +205,12 @@ def build_runtime(
             from proxima.api.promote import EnginePromoter
 
             rt.promoter = EnginePromoter(rt.engine, settings.engine.checkpoint)
+            from proxima.api.promote import restore_promoted
+            from proxima.store.audit import AuditLog
+
+            restored = restore_promoted(rt.promoter, AuditLog(db), settings.server.models_dir)
+            if restored:
+                rt.notes.append(f"live engine runs {restored}, promoted before the restart")
         except Exception as exc:
             rt.notes.append(f"live engine not started: {type(exc).__name__}: {exc}")
     elif not settings.streams:

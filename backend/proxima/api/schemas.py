@@ -180,6 +180,13 @@ class TrainingStart(_In):
 TRAINING_FORM: tuple[str, ...] = tuple(TrainingStart.model_fields)
 
 
+class PromoteRequest(_In):
+    """A promotion's override: needed (non-empty) when the candidate is below the minimum
+    accuracy or the model in use on the held-out set."""
+
+    override_reason: str | None = Field(None, max_length=500)
+
+
 class EstopConfirm(_In):
     confirmation_id: str = Field(min_length=1, max_length=128)
 

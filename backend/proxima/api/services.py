@@ -43,3 +43,11 @@ class Console:
         from proxima.store.command_log import CommandLog
 
         return CommandLog(self.db_engine)
+
+    @cached_property
+    def evaluator(self) -> Any:
+        """Figures of checkpoints on the held-out set (proxima.api.model_eval), its clips
+        beside the database."""
+        from proxima.api.model_eval import ModelEvaluator
+
+        return ModelEvaluator(self.settings.server.db_path.parent / "console-eval")

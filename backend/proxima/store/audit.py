@@ -36,6 +36,7 @@ class AuditAction(StrEnum):
     DRONE_STOP_REQUEST = "drone.stop_request"
     DRONE_STOP = "drone.stop"
     MODEL_PROMOTE = "model.promote"
+    MODEL_ROLLBACK = "model.rollback"
     RUN_START = "training.start"
     RUN_CANCEL = "training.cancel"
     RECORDING_START = "sample.record"

@@ -2,11 +2,12 @@
 // Live page: one tile per stream (frame + skeleton, raw gesture, filtered action, armed,
 // stream and link state), the driving stream highlighted, drones and the command log
 // beside.
-import { isSupervisor } from "../api.js";
+import { api, isSupervisor } from "../api.js";
 import { openEstop } from "../estop.js";
 import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
 import { drivingDrone, state } from "../store.js";
+import { on } from "../ws.js";
 
 /** @typedef {import("../store.js").StreamRecord} StreamRecord */
 /**
@@ -25,6 +26,8 @@ let raf = 0;
 let seenVersion = -1;
 /** @type {Map<string, Tile>} */
 const tiles = new Map();
+/** @type {(() => void) | null} */
+let offModel = null;
 
 /** @param {number} x */
 const pct = (x) => `${Math.round(x * 100)}%`;
@@ -211,6 +214,35 @@ function frame() {
   raf = requestAnimationFrame(frame);
 }
 
+/** @param {number | null | undefined} x */
+const fixed3 = (x) => (typeof x === "number" ? x.toFixed(3) : "—");
+
+// Which model the live engine runs: name, file date, held-out figures, who put it there.
+async function showModel() {
+  const box = root?.querySelector(".model-in-use");
+  if (!(box instanceof HTMLElement)) return;
+  try {
+    const m = await api("/models/active");
+    const f = m.figures;
+    const when = m.since ? new Date(m.since * 1000).toLocaleString() : "";
+    const how = m.action === "configured" ? "configured model" : `${m.action}d by ${m.by} at ${when}`;
+    box.replaceChildren(
+      el("span", { class: "label", text: "Model in use " }),
+      el("b", { class: "model-name", text: m.name }),
+      el("span", {
+        class: "model-figures",
+        text: f ? ` · accuracy ${fixed3(f.accuracy)}, wave_off ${fixed3(f.abort_recall)} (${f.set} held-out)` : "",
+      }),
+      el("div", {
+        class: "muted",
+        text: `${how}${m.modified ? ` · file of ${new Date(m.modified * 1000).toLocaleDateString()}` : ""}`,
+      }),
+    );
+  } catch (err) {
+    box.textContent = `Model in use: ${err instanceof Error ? err.message : String(err)}`;
+  }
+}
+
 /** @param {HTMLElement} container */
 export function mount(container) {
   root = container;
@@ -219,6 +251,7 @@ export function mount(container) {
     el(
       "aside",
       { class: "side" },
+      el("div", { class: "model-in-use card" }),
       el("h2", { text: "Drones" }),
       el("div", { class: "alarms" }),
       el("div", { class: "drones" }),
@@ -235,9 +268,13 @@ export function mount(container) {
   seenVersion = -1;
   for (const s of state.streams.values()) s.dirty = true;
   raf = requestAnimationFrame(frame);
+  showModel();
+  offModel = on("model", () => showModel());
 }
 
 export function unmount() {
+  offModel?.();
+  offModel = null;
   cancelAnimationFrame(raf);
   root = null;
   tiles.clear();
