@@ -140,6 +140,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {number[] | null} global_position
  * @property {number[] | null} position_target
  * @property {boolean} gesture_control
+ * @property {boolean} stopped
  */
 
 /**

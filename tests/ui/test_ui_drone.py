@@ -134,12 +134,32 @@ def test_emergency_stop_asks_for_confirmation(page, flying: Console) -> None:  #
     assert link.telemetry().landed == "in_air"
 
     page.click("#estop-open")
-    page.click("#estop-request")
+    page.click("#estop-request-all")  # every configured drone: here the one
+    assert "Really stop main?" in page.inner_text("#estop-question")
     page.click("#estop-confirm")
-    page.wait_for_selector("#estop-result.ok")
+    # The dialog reports and closes; the banner keeps the result (issue 26, finding 5).
+    page.wait_for_selector("#estop-dialog", state="hidden")
+    page.wait_for_selector("#banner.ok:has-text('main: emergency stop sent')")
     sent = wait_for(
         lambda: [r for r in _emergency_rows(flying) if r["status"] == "sent"],
         what="the logged emergency stop",
     )
     assert sent[0]["drone"] == "main" and sent[0]["sent"] is not None
     wait_for(lambda: link.telemetry().altitude < 0.3, timeout=20, what="the landing")
+
+    # Never stale (finding 2): the tile and the card say stopped, not armed or driving.
+    page.wait_for_selector(".tile[data-stream=front].stopped .badge.stopped-badge")
+    assert "STOPPED" in page.inner_text(".tile[data-stream=front] .value.armed")
+    assert not page.query_selector(".tile[data-stream=front] .driving-badge")
+    page.wait_for_selector(".drone[data-drone=main] .badge.stopped-badge")
+    screenshot(page, "emergency-stop-stopped")
+    link_state = flying.runtime.drones.gesture_control_armed("main")
+    assert link_state is False
+    # Resume behind a confirmation: the stop clears, gesture control stays off until
+    # the operator's have_command.
+    page.once("dialog", lambda d: d.accept())
+    page.click(".drone[data-drone=main] button.resume")
+    page.wait_for_selector("#banner.ok:has-text('resumed')")
+    page.wait_for_selector(".tile[data-stream=front]:not(.stopped)")
+    assert not link.emergency_stopped
+    assert "disarmed" in page.inner_text(".tile[data-stream=front] .value.armed")

@@ -79,6 +79,19 @@ class ConsoleRuntime:
         if old is None:
             raise RuntimeError("no live engine runs in this console")
         old.stop()
+        # The new engine starts disarmed: say so on the bus, so the drones' gesture
+        # control and every tile follow (the old engine's last word may be "armed").
+        from proxima.events import ArmingEvent
+
+        for spec in old.specs:
+            self.bus.publish(
+                ArmingEvent(
+                    t=0.0,
+                    stream=spec.name,
+                    armed=False,
+                    reason="engine restarted: have_command again",
+                )
+            )
         engine = start_engine(
             self.settings, self.bus, self.realtime, old.classifier(old.specs[0].name)
         )

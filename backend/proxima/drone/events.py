@@ -31,6 +31,7 @@ class DroneStateEvent(Event):
     global_position: list[float] | None = None  # [lat, lon, alt AMSL]
     position_target: list[float] | None = None
     gesture_control: bool = False
+    stopped: bool = False  # emergency-stopped and not resumed: no gesture control
     type: str = field(default="drone_state", init=False)
 
 

@@ -35,6 +35,7 @@ class AuditAction(StrEnum):
     USER_DISABLE = "user.disable"
     DRONE_STOP_REQUEST = "drone.stop_request"
     DRONE_STOP = "drone.stop"
+    DRONE_RESUME = "drone.resume"
     MODEL_PROMOTE = "model.promote"
     MODEL_ROLLBACK = "model.rollback"
     RUN_START = "training.start"

@@ -3,7 +3,7 @@
 // stream and link state), the driving stream highlighted, drones and the command log
 // beside.
 import { api, isSupervisor } from "../api.js";
-import { openEstop } from "../estop.js";
+import { openEstop, resumeDrone } from "../estop.js";
 import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
 import { drivingDrone, state } from "../store.js";
@@ -78,15 +78,21 @@ function makeTile(s) {
 
 /** @param {StreamRecord} s @param {Tile} t */
 function renderTileText(s, t) {
-  const driving = s.driving;
-  t.el.classList.toggle("driving", driving);
   const drone = state.drones.get(s.drone);
-  const link = drone?.state?.link || "";
+  const ds = drone?.state;
+  // Gesture control is the drone controller's (drone_state), which an emergency stop
+  // turns off; the engine's arming alone (StreamLive.armed) would show a stale ARMED.
+  const stopped = Boolean(ds?.stopped);
+  const driving = s.driving && !stopped;
+  t.el.classList.toggle("driving", driving);
+  t.el.classList.toggle("stopped", stopped);
+  const link = ds?.link || "";
   t.f.badges.replaceChildren(
     el("span", { class: "badge", text: s.drone ? `→ ${s.drone}` : "" }),
     el("span", { class: "badge", text: s.priority === 0 ? "main" : `#${s.priority}` }),
     el("span", { class: "badge", text: s.kind }),
     ...(driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
+    ...(stopped ? [el("span", { class: "badge stopped-badge", text: "STOPPED" })] : []),
   );
   const lv = s.live; // the server's StreamLive (api/live.py)
   // all_clear / not_clear differ only in the thumb: the engine does not let them become
@@ -97,8 +103,15 @@ function renderTileText(s, t) {
     : "—";
   t.f.gesture.classList.toggle("withheld", held);
   t.f.action.textContent = lv.action ? `${lv.action} ${pct(lv.action_confidence)}` : "—";
-  t.f.armed.textContent = lv.armed ? "ARMED" : "disarmed";
-  t.f.armed.className = `value armed ${lv.armed ? "on" : "off"}`;
+  const droneArmed = ds ? ds.gesture_control : lv.armed;
+  const armed = lv.armed && droneArmed && !stopped;
+  let control = "disarmed";
+  if (stopped) control = "STOPPED · a supervisor must resume it";
+  else if (armed) control = "ARMED";
+  else if (lv.armed) control = "disarmed (the drone's gesture control is off: have_command)";
+  else if (lv.arming_reason) control = `disarmed · ${lv.arming_reason}`;
+  t.f.armed.textContent = control;
+  t.f.armed.className = `value armed ${stopped ? "stopped" : armed ? "on" : "off"}`;
   t.f.state.textContent = lv.state || "—";
   t.f.state.className = `value state s-${lv.state || "none"}`;
   t.f.link.textContent = link || "—";
@@ -126,15 +139,21 @@ function renderSide(root) {
       const pos = st?.position ? st.position.map((v) => v.toFixed(1)).join(", ") : "—";
       const card = el(
         "div",
-        { class: `drone ${d.name === driving ? "driving" : ""}`, "data-drone": d.name },
+        { class: `drone ${d.name === driving && !st?.stopped ? "driving" : ""}${st?.stopped ? " stopped" : ""}`, "data-drone": d.name },
         el("b", { text: d.name }),
         el("span", { class: `badge l-${st?.link || "none"}`, text: st?.link || "no telemetry" }),
-        ...(d.name === driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
+        ...(d.name === driving && !st?.stopped ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
+        ...(st?.stopped ? [el("span", { class: "badge stopped-badge", text: "STOPPED" })] : []),
       );
       if (isSupervisor()) {
         const b = el("button", { class: "estop small", text: "stop" });
         b.addEventListener("click", () => openEstop(d.name));
         card.append(b);
+        if (st?.stopped) {
+          const r = el("button", { class: "resume small", text: "resume…" });
+          r.addEventListener("click", () => resumeDrone(d.name));
+          card.append(r);
+        }
       }
       const battery = st?.battery_pct != null ? `${Math.round(st.battery_pct)}%` : "—";
       card.append(

@@ -179,6 +179,7 @@ class MavlinkLink(MavlinkActions):
                     drone=self.name,
                     link=link,
                     gesture_control=self.gesture_control,
+                    stopped=self.emergency_stopped,
                 )
             )
             return
@@ -189,6 +190,7 @@ class MavlinkLink(MavlinkActions):
                 drone=self.name,
                 link=link,
                 gesture_control=self.gesture_control,
+                stopped=self.emergency_stopped,
                 autopilot=tel.autopilot,
                 mode=tel.mode,
                 armed=tel.armed,
