@@ -75,6 +75,30 @@ export const MESSAGE_TYPES = Object.freeze([
  */
 
 /**
+ * One row of the durable command log (`proxima.store.command_log`): a command's
+ * whole life cycle, times in ISO 8601 UTC.
+ * @typedef {object} CommandLogRow
+ * @property {number} id
+ * @property {string | null} created_at
+ * @property {string} drone
+ * @property {string} source
+ * @property {string} command
+ * @property {string} stream
+ * @property {number | null} gesture_t
+ * @property {number | null} confidence
+ * @property {string} action
+ * @property {string} status
+ * @property {string} reason
+ * @property {string | null} ack
+ * @property {number} attempts
+ * @property {number | null} ack_latency_ms
+ * @property {string | null} outcome
+ * @property {string | null} sent_at
+ * @property {string | null} acked_at
+ * @property {string | null} completed_at
+ */
+
+/**
  * What became of one command: refused by safety, sent and acknowledged (or not),
  * and its outcome once known (reached, landed, ...). `log_id` is its command-log row.
  * @typedef {object} CommandResultEvent
@@ -174,6 +198,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {StreamOut[]} streams
  * @property {DroneOut[]} drones
  * @property {LiveCommand[]} commands
+ * @property {CommandLogRow[]} command_log
  */
 
 /**

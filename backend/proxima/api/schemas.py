@@ -112,6 +112,30 @@ class DroneOut(BaseModel):
     state: DroneStateEvent | None
 
 
+class CommandLogRow(BaseModel):
+    """One row of the durable command log (`proxima.store.command_log`): a command's
+    whole life cycle, times in ISO 8601 UTC."""
+
+    id: int
+    created_at: str | None
+    drone: str
+    source: str
+    command: str
+    stream: str
+    gesture_t: float | None
+    confidence: float | None
+    action: str
+    status: str  # pending, sent, refused, failed, ignored, done
+    reason: str
+    ack: str | None
+    attempts: int
+    ack_latency_ms: float | None
+    outcome: str | None
+    sent_at: str | None
+    acked_at: str | None
+    completed_at: str | None
+
+
 class Hello(BaseModel):
     """The WebSocket's first message: who is connected and the console's live picture
     (what `GET /streams`, `/drones` and `/commands/live` return), before any event."""
@@ -122,6 +146,7 @@ class Hello(BaseModel):
     streams: list[StreamOut]
     drones: list[DroneOut]
     commands: list[LiveCommand]  # newest first
+    command_log: list[CommandLogRow]  # the durable log, newest first (emergency stops too)
 
 
 class RecordingRequest(_In):

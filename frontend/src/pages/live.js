@@ -167,23 +167,7 @@ function renderSide(root) {
       return card;
     }),
   );
-  const log = find(root, ".command-log tbody");
-  log.replaceChildren(
-    ...state.commands.slice(0, 60).map((c) => {
-      const r = c.result;
-      const outcome = r ? [r.status, r.ack, r.outcome].filter(Boolean).join(" · ") : "decided";
-      const when = new Date(c.ts * 1000).toLocaleTimeString();
-      return el(
-        "tr",
-        { class: r ? `st-${r.status}` : "" },
-        el("td", { text: when }),
-        el("td", { text: c.drone || "" }),
-        el("td", { class: "cmd", text: c.command || "" }),
-        el("td", { text: c.stream || (r && r.status ? "console" : "") }),
-        el("td", { class: "outcome", text: outcome, title: (r && r.reason) || "" }),
-      );
-    }),
-  );
+  renderLog(root);
   const alarms = find(root, ".alarms");
   alarms.replaceChildren(
     ...state.alarms
@@ -191,6 +175,79 @@ function renderSide(root) {
       .slice(0, 5)
       .map((a) => el("div", { class: "alarm", text: `${a.drone}: ${a.message}` })),
   );
+}
+
+/** @param {string} x */
+const words = (x) => x.replaceAll("_", " ");
+
+// Which outcome group a row falls in, for the filter.
+/** @param {import("../store.js").CommandRow} c */
+function outcomeGroup(c) {
+  if (!c.status) return "decided";
+  if (c.status === "done" || (c.status === "sent" && c.ack === "accepted")) return "ok";
+  return c.status; // pending, sent, refused, failed, ignored
+}
+
+/** @param {import("../store.js").CommandRow} c */
+function stageText(c) {
+  const stages = ["decided"];
+  if (c.status === "pending") stages.push(c.outcome ? words(c.outcome) : "pending");
+  else if (c.status === "sent" || c.status === "done") {
+    if (c.status === "sent" || c.ack) stages.push("sent"); // a done arm_control sent nothing
+    if (c.ack) stages.push(c.ack === "accepted" ? "acknowledged" : `ack ${words(c.ack)}`);
+    if (c.status === "done") stages.push(c.outcome ? words(c.outcome) : "done");
+  } else if (c.status) stages.push(c.status);
+  return stages.join(" → ");
+}
+
+/** @param {HTMLElement} root */
+function renderLog(root) {
+  const droneSel = /** @type {HTMLSelectElement} */ (find(root, "select.log-drone"));
+  const outSel = /** @type {HTMLSelectElement} */ (find(root, "select.log-outcome"));
+  const names = ["", ...new Set([...state.drones.keys(), ...state.commands.map((c) => c.drone)])];
+  if (droneSel.options.length !== names.length) {
+    const keep = droneSel.value;
+    droneSel.replaceChildren(...names.map((n) => el("option", { value: n, text: n || "all drones" })));
+    droneSel.value = keep;
+  }
+  const rows = state.commands.filter(
+    (c) => (!droneSel.value || c.drone === droneSel.value) && (!outSel.value || outcomeGroup(c) === outSel.value),
+  );
+  const log = find(root, ".command-log tbody");
+  log.replaceChildren(
+    ...rows.slice(0, 60).map((c) => {
+      const when = c.ts ? new Date(c.ts * 1000).toLocaleTimeString() : "—";
+      const group = outcomeGroup(c);
+      const cell = el("td", { class: "outcome" }, el("div", { class: "stage", text: stageText(c) }));
+      if (c.reason && group !== "ok") cell.append(el("div", { class: "reason", text: c.reason }));
+      return el(
+        "tr",
+        { class: `st-${c.status || "decided"} g-${group}`, "data-log-id": c.log_id ?? "" },
+        el("td", { class: "when", text: when }),
+        el("td", { class: "who", text: c.drone || "" }),
+        el("td", {}, el("div", { class: "cmd", text: c.command || "" }), el("div", { class: "muted seen-by", text: c.stream ? `seen by ${c.stream}` : "console" })),
+        cell,
+      );
+    }),
+  );
+  if (!rows.length) log.replaceChildren(el("tr", {}, el("td", { colspan: "4", class: "muted", text: state.commands.length ? "No command matches the filter." : "No command yet." })));
+}
+
+// The durable log as CSV, from the server (the same filter).
+/** @param {HTMLElement} root */
+async function exportCsv(root) {
+  const droneSel = /** @type {HTMLSelectElement} */ (find(root, "select.log-drone"));
+  const outSel = /** @type {HTMLSelectElement} */ (find(root, "select.log-outcome"));
+  const q = new URLSearchParams();
+  if (droneSel.value) q.set("drone", droneSel.value);
+  const status = { ok: "", decided: "" }[outSel.value] ?? outSel.value;
+  if (status) q.set("status", status);
+  const res = await fetch(`./api/commands/export.csv?${q}`, { headers: { Authorization: `Bearer ${sessionStorage.getItem("proxima.token")}` } });
+  const blob = await res.blob();
+  const a = el("a", { href: URL.createObjectURL(blob), download: "command-log.csv" });
+  document.body.append(a);
+  a.click();
+  a.remove();
 }
 
 /** @param {HTMLElement} root */
@@ -276,13 +333,26 @@ export function mount(container) {
       el("div", { class: "drones" }),
       el("h2", { text: "Command log" }),
       el(
+        "div",
+        { class: "row log-tools" },
+        el("select", { class: "log-drone", title: "drone" }, el("option", { value: "", text: "all drones" })),
+        el(
+          "select",
+          { class: "log-outcome", title: "outcome" },
+          ...[["", "all outcomes"], ["ok", "done / acknowledged"], ["refused", "refused"], ["failed", "failed"], ["ignored", "ignored"], ["pending", "pending"], ["sent", "sent"], ["decided", "decided only"]].map(([v, t]) => el("option", { value: v, text: t })),
+        ),
+        el("button", { type: "button", class: "small export-csv", text: "Export CSV" }),
+      ),
+      el(
         "table",
         { class: "command-log" },
-        el("thead", {}, el("tr", {}, ...["time", "drone", "command", "seen by", "outcome"].map((h) => el("th", { text: h })))),
+        el("thead", {}, el("tr", {}, ...["time", "drone", "command", "life cycle"].map((h) => el("th", { text: h })))),
         el("tbody"),
       ),
     ),
   );
+  for (const sel of root.querySelectorAll(".log-tools select")) sel.addEventListener("change", () => (seenVersion = -1));
+  find(root, "button.export-csv").addEventListener("click", () => root && exportCsv(root));
   tiles.clear();
   seenVersion = -1;
   for (const s of state.streams.values()) s.dirty = true;
