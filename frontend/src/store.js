@@ -115,6 +115,7 @@ on("hello", (msg) => {
   }
   rows.sort((a, b) => b.ts - a.ts);
   state.commands = rows.slice(0, MAX_COMMANDS);
+  state.alarms = msg.alarms.slice(0, MAX_ALARMS);
   changed();
 });
 
@@ -218,4 +219,27 @@ export function drivingStream() {
 /** The drone the driving stream commands, if any. */
 export function drivingDrone() {
   return drivingStream()?.drone || null;
+}
+
+// Severity of alarms published without one by older links: these kinds are critical.
+const CRITICAL_KINDS = new Set(["link_lost", "emergency_stop", "failsafe_landing"]);
+
+/** @param {DroneAlarmEvent} a @returns {"critical" | "warning"} */
+export function severity(a) {
+  return a.severity === "critical" || CRITICAL_KINDS.has(a.kind) ? "critical" : "warning";
+}
+
+/** The alarms in force: the newest event of each drone and kind, if it is active;
+ * critical first. */
+export function activeAlarms() {
+  const seen = new Set();
+  /** @type {DroneAlarmEvent[]} */
+  const out = [];
+  for (const a of state.alarms) {
+    const key = `${a.drone}|${a.kind}`;
+    if (seen.has(key)) continue;
+    seen.add(key);
+    if (a.active) out.push(a);
+  }
+  return out.sort((a, b) => Number(severity(b) === "critical") - Number(severity(a) === "critical"));
 }

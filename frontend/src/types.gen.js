@@ -128,6 +128,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {string} kind
  * @property {string} message
  * @property {boolean} active
+ * @property {string} severity
  */
 
 /**
@@ -199,6 +200,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {DroneOut[]} drones
  * @property {LiveCommand[]} commands
  * @property {CommandLogRow[]} command_log
+ * @property {DroneAlarmEvent[]} alarms
  */
 
 /**

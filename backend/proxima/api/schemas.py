@@ -11,7 +11,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from proxima.api.live import LiveCommand, StreamLive
 from proxima.api.recorder import MAX_COUNTDOWN_S, MAX_FRAMES
-from proxima.drone.events import DroneStateEvent
+from proxima.drone.events import DroneAlarmEvent, DroneStateEvent
 from proxima.federated.config import (
     BatchSize,
     FractionFit,
@@ -147,6 +147,7 @@ class Hello(BaseModel):
     drones: list[DroneOut]
     commands: list[LiveCommand]  # newest first
     command_log: list[CommandLogRow]  # the durable log, newest first (emergency stops too)
+    alarms: list[DroneAlarmEvent]  # raised and cleared since start, newest first
 
 
 class RecordingRequest(_In):

@@ -36,6 +36,7 @@ class Console:
     # The viser server's port on viser_host when one runs: only the console's /viser/
     # proxy connects to it; browsers are never told.
     viz_port: int | None = None
+    alarms: Any = None  # proxima.api.alarms.AlarmMonitor
 
     @cached_property
     def command_log(self) -> Any:

@@ -62,4 +62,5 @@ class DroneAlarmEvent(Event):
     kind: str
     message: str
     active: bool = True
+    severity: str = "warning"  # "warning" or "critical"
     type: str = field(default="drone_alarm", init=False)

@@ -43,6 +43,8 @@ class AuditAction(StrEnum):
     RECORDING_START = "sample.record"
     SAMPLE_KEEP = "sample.keep"
     SAMPLE_DELETE = "sample.delete"
+    ALARM_RAISE = "alarm.raise"  # by "console": a derived alarm (api/alarms.py)
+    ALARM_CLEAR = "alarm.clear"
 
 
 class AuditOutcome(StrEnum):

@@ -6,7 +6,7 @@ import { api, isSupervisor } from "../api.js";
 import { openEstop, resumeDrone } from "../estop.js";
 import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
-import { drivingDrone, state } from "../store.js";
+import { activeAlarms, drivingDrone, severity, state } from "../store.js";
 import { on } from "../ws.js";
 
 /** @typedef {import("../store.js").StreamRecord} StreamRecord */
@@ -156,13 +156,14 @@ function renderSide(root) {
         }
       }
       const battery = st?.battery_pct != null ? `${Math.round(st.battery_pct)}%` : "—";
+      const low = activeAlarms().find((a) => a.drone === d.name && a.kind === "battery_low");
       card.append(
         el("div", {
           text: st?.link
             ? [st.mode, st.armed ? "motors armed" : "motors disarmed", st.landed].filter(Boolean).join(" · ")
             : "no telemetry yet",
         }),
-        el("div", { text: `NED ${pos} m · battery ${battery}` }),
+        el("div", {}, `NED ${pos} m · `, el("span", { class: `battery ${low ? `sev-${severity(low)}` : ""}`, text: `battery ${battery}` })),
       );
       return card;
     }),
@@ -170,10 +171,15 @@ function renderSide(root) {
   renderLog(root);
   const alarms = find(root, ".alarms");
   alarms.replaceChildren(
-    ...state.alarms
-      .filter((a) => a.active)
+    ...activeAlarms()
       .slice(0, 5)
-      .map((a) => el("div", { class: "alarm", text: `${a.drone}: ${a.message}` })),
+      .map((a) => el("div", { class: `alarm sev-${severity(a)}`, "data-kind": a.kind, text: `${severity(a).toUpperCase()} · ${a.message}` })),
+  );
+  // Every alarm raised or cleared since the server started, newest first.
+  find(root, ".alarm-log").replaceChildren(
+    ...state.alarms.slice(0, 8).map((a) =>
+      el("div", { class: `alarm-line sev-${severity(a)} ${a.active ? "raised" : "cleared"}`, text: `${new Date(a.t * 1000).toLocaleTimeString()} ${a.active ? severity(a) : "cleared"}: ${a.message}` }),
+    ),
   );
 }
 
@@ -330,6 +336,7 @@ export function mount(container) {
       el("div", { class: "model-in-use card" }),
       el("h2", { text: "Drones" }),
       el("div", { class: "alarms" }),
+      el("details", { class: "alarm-history" }, el("summary", { text: "Alarm log" }), el("div", { class: "alarm-log" })),
       el("div", { class: "drones" }),
       el("h2", { text: "Command log" }),
       el(

@@ -41,6 +41,7 @@ async def websocket_endpoint(websocket: WebSocket) -> None:
             streams=stream_list(console),
             drones=drone_list(console),
             commands=console.live.commands()[:50],
+            alarms=console.alarms.recent() if console.alarms else [],
             command_log=[
                 CommandLogRow.model_validate(r) for r in console.command_log.recent(limit=200)
             ],
