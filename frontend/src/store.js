@@ -67,6 +67,7 @@ export const state = {
   commands: [],
   /** @type {DroneAlarmEvent[]} newest first */
   alarms: [],
+  handoverReason: "", // why the driving stream drives, or none does (the newest handover)
   version: 0, // bumped on any change outside pose/thumbnail
 };
 
@@ -105,6 +106,7 @@ function putStream(config, live) {
 on("hello", (msg) => {
   state.streams.clear();
   for (const s of msg.streams) putStream(s, s.live).driving = s.driving;
+  state.handoverReason = msg.streams[0]?.handover_reason ?? "";
   state.drones.clear();
   for (const d of msg.drones) state.drones.set(d.name, { name: d.name, streams: d.streams, state: d.state });
   // The durable log first (times, outcomes, emergency stops: the same after a reload),
@@ -121,6 +123,7 @@ on("hello", (msg) => {
 
 on("stream_live", (msg) => {
   putStream({ name: msg.stream }, msg.live).driving = msg.driving;
+  state.handoverReason = msg.handover_reason;
   changed();
 });
 

@@ -361,6 +361,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {string} stream
  * @property {boolean} driving
  * @property {StreamLive} live
+ * @property {string} handover_reason
  * @property {"stream_live"} type
  */
 
@@ -376,6 +377,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {boolean} configured
  * @property {boolean} driving
  * @property {StreamLive} live
+ * @property {string} handover_reason
  */
 
 /**

@@ -97,6 +97,7 @@ class StreamOut(BaseModel):
     configured: bool
     driving: bool
     live: StreamLive
+    handover_reason: str = ""  # the newest handover's (see StreamLiveMessage)
 
 
 class DroneOut(BaseModel):

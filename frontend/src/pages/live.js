@@ -6,7 +6,7 @@ import { api, isSupervisor } from "../api.js";
 import { openEstop, resumeDrone } from "../estop.js";
 import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
-import { activeAlarms, drivingDrone, severity, state } from "../store.js";
+import { activeAlarms, drivingDrone, drivingStream, severity, state } from "../store.js";
 import { on } from "../ws.js";
 
 /** @typedef {import("../store.js").StreamRecord} StreamRecord */
@@ -28,6 +28,13 @@ let seenVersion = -1;
 const tiles = new Map();
 /** @type {(() => void) | null} */
 let offModel = null;
+
+/** @type {Record<string, string>} */
+const KIND_TEXT = {
+  camera: "camera: live video through pose estimation",
+  replay: "replay: recorded landmarks (a LASER clip), no pixels",
+  sim: "sim: the simulated scene's camera",
+};
 
 /** @param {number} x */
 const pct = (x) => `${Math.round(x * 100)}%`;
@@ -87,12 +94,20 @@ function renderTileText(s, t) {
   t.el.classList.toggle("driving", driving);
   t.el.classList.toggle("stopped", stopped);
   const link = ds?.link || "";
+  const leader = drivingStream();
   t.f.badges.replaceChildren(
-    el("span", { class: "badge", text: s.drone ? `→ ${s.drone}` : "" }),
-    el("span", { class: "badge", text: s.priority === 0 ? "main" : `#${s.priority}` }),
-    el("span", { class: "badge", text: s.kind }),
-    ...(driving ? [el("span", { class: "badge driving-badge", text: "DRIVING" })] : []),
-    ...(stopped ? [el("span", { class: "badge stopped-badge", text: "STOPPED" })] : []),
+    el("span", { class: "badge b-drone", text: s.drone ? `→ ${s.drone}` : "", title: `this camera's gestures command drone ${s.drone}` }),
+    el("span", {
+      class: "badge b-priority",
+      text: s.priority === 0 ? "main" : `#${s.priority}`,
+      title: s.priority === 0
+        ? "priority 0: the main camera; it drives whenever it sees the operator"
+        : `priority ${s.priority}: drives only while every camera ranked above it has lost the operator`,
+    }),
+    el("span", { class: "badge b-kind", text: s.kind, title: KIND_TEXT[s.kind] ?? s.kind }),
+    ...(driving ? [el("span", { class: "badge driving-badge", text: "DRIVING", title: `its gestures command ${s.drone} now: ${words(state.handoverReason || "operator_acquired")}` })] : []),
+    ...(!driving && !stopped && leader ? [el("span", { class: "badge standby-badge", text: "STANDBY", title: `standby: takes over if ${leader.name} loses the operator (priority ${s.priority})` })] : []),
+    ...(stopped ? [el("span", { class: "badge stopped-badge", text: "STOPPED", title: "emergency-stopped: a supervisor must resume it" })] : []),
   );
   const lv = s.live; // the server's StreamLive (api/live.py)
   // all_clear / not_clear differ only in the thumb: the engine does not let them become
@@ -256,6 +271,30 @@ async function exportCsv(root) {
   a.remove();
 }
 
+// One line on who drives and why: "front drives main (…); left is standby, priority 1",
+// or that no drone is driving (no stream drives, or gesture control is disarmed).
+/** @param {HTMLElement} root */
+function renderWho(root) {
+  const box = find(root, ".who-drives");
+  const streams = [...state.streams.values()].sort((a, b) => a.priority - b.priority);
+  const leader = drivingStream();
+  const standby = streams.filter((s) => s !== leader).map((s) => `${s.name} is standby, priority ${s.priority}`);
+  const stopped = leader && state.drones.get(leader.drone)?.state?.stopped;
+  let text;
+  let cls = "off";
+  if (!streams.length) text = "No streams.";
+  else if (!leader) text = `No drone driving: no camera sees the operator${state.handoverReason ? ` (${words(state.handoverReason)})` : ""}.`;
+  else if (stopped) text = `No drone driving: ${leader.drone} is emergency-stopped.`;
+  else if (!leader.live.armed) text = `No drone driving: gesture control disarmed${leader.live.arming_reason ? ` (${words(leader.live.arming_reason)})` : ""}; have_command arms it. ${leader.name} would drive ${leader.drone}.`;
+  else {
+    text = `${leader.name} drives ${leader.drone} (${words(state.handoverReason || "operator acquired")}).`;
+    cls = "on";
+  }
+  if (leader && standby.length) text += ` ${standby.join("; ")}.`;
+  box.textContent = text;
+  box.className = `who-drives ${cls}`;
+}
+
 /** @param {HTMLElement} root */
 function syncTiles(root) {
   const grid = find(root, ".tiles");
@@ -281,6 +320,7 @@ function frame() {
       if (t) renderTileText(s, t);
     }
     renderSide(root);
+    renderWho(root);
   }
   for (const s of state.streams.values()) {
     const t = tiles.get(s.name);
@@ -329,7 +369,7 @@ async function showModel() {
 export function mount(container) {
   root = container;
   root.append(
-    el("section", { class: "tiles" }),
+    el("section", { class: "main-col" }, el("div", { class: "who-drives" }), el("section", { class: "tiles" })),
     el(
       "aside",
       { class: "side" },
