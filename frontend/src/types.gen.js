@@ -165,6 +165,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {number[] | null} global_position
  * @property {number[] | null} position_target
  * @property {boolean} gesture_control
+ * @property {number | null} heard_age_s
  * @property {boolean} stopped
  */
 

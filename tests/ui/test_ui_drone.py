@@ -112,6 +112,24 @@ def test_3d_view_shows_the_drone(page, flying: Console) -> None:  # type: ignore
     screenshot(page, "3d-view")
 
 
+def test_telemetry_is_legible(page, flying: Console) -> None:  # type: ignore[no-untyped-def]
+    """Finding 7: altitude above home (positive up, where the link's NED says -3),
+    heading, ground speed, how long ago the vehicle was heard, and the current target."""
+    import re
+
+    login(page, flying.url)
+    card = ".drone[data-drone=main]"
+    page.wait_for_selector(f"{card} .telemetry:has-text('above home')")
+    text = page.inner_text(f"{card} .telemetry")
+    alt = float(re.search(r"alt (-?[\d.]+) m above home", text).group(1))
+    assert 2.5 < alt < 3.5, text  # up is positive
+    assert re.search(r"heading \d+°", text) and re.search(r"speed [\d.]+ m/s", text), text
+    age = float(re.search(r"heard ([\d.]+) s ago", text).group(1))
+    assert age < 3.0, text
+    target = page.inner_text(f"{card} .target")
+    assert re.search(r"target -?0\.0 m N, 4\.0 m E, alt 3\.0 m", target), target
+
+
 def test_emergency_stop_asks_for_confirmation(page, flying: Console) -> None:  # type: ignore[no-untyped-def]
     link = flying.runtime.links["main"]
     login(page, flying.url)

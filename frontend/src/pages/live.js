@@ -28,6 +28,7 @@ let seenVersion = -1;
 const tiles = new Map();
 /** @type {(() => void) | null} */
 let offModel = null;
+let ageTimer = 0;
 
 /** @type {Record<string, string>} */
 const KIND_TEXT = {
@@ -144,6 +145,32 @@ function drawTile(s, t) {
   t.canvas.dataset.poseT = s.pose ? String(s.pose.t) : "";
 }
 
+// Telemetry in the supervisor's terms: altitude above home (up positive; the link's
+// position is NED, down positive), heading, ground speed, and how long ago the vehicle
+// was last heard (its age at publication plus the time since).
+/** @param {import("../store.js").DroneRecord["state"]} st */
+function telemetryText(st) {
+  if (!st?.position) return "no position yet";
+  const alt = -st.position[2];
+  const parts = [`alt ${alt.toFixed(1)} m above home`];
+  if (st.attitude) parts.push(`heading ${Math.round(((st.attitude[2] * 180) / Math.PI + 360) % 360)}°`);
+  if (st.velocity) parts.push(`speed ${Math.hypot(st.velocity[0], st.velocity[1]).toFixed(1)} m/s`);
+  if (st.heard_age_s != null) {
+    const age = st.heard_age_s + Math.max(0, Date.now() / 1000 - (/** @type {any} */ (st).ts ?? st.t));
+    parts.push(`heard ${age < 10 ? age.toFixed(1) : Math.round(age)} s ago`);
+  }
+  return parts.join(" · ");
+}
+
+/** @param {import("../store.js").DroneRecord["state"]} st */
+function targetText(st) {
+  const p = st?.position;
+  const tg = st?.position_target;
+  if (!tg || !p) return "no target";
+  const d = Math.hypot(tg[0] - p[0], tg[1] - p[1], tg[2] - p[2]);
+  return `target ${tg[0].toFixed(1)} m N, ${tg[1].toFixed(1)} m E, alt ${(-tg[2]).toFixed(1)} m (${d.toFixed(1)} m away)`;
+}
+
 /** @param {HTMLElement} root */
 function renderSide(root) {
   const drones = find(root, ".drones");
@@ -151,7 +178,6 @@ function renderSide(root) {
   drones.replaceChildren(
     ...[...state.drones.values()].map((d) => {
       const st = d.state;
-      const pos = st?.position ? st.position.map((v) => v.toFixed(1)).join(", ") : "—";
       const card = el(
         "div",
         { class: `drone ${d.name === driving && !st?.stopped ? "driving" : ""}${st?.stopped ? " stopped" : ""}`, "data-drone": d.name },
@@ -178,7 +204,8 @@ function renderSide(root) {
             ? [st.mode, st.armed ? "motors armed" : "motors disarmed", st.landed].filter(Boolean).join(" · ")
             : "no telemetry yet",
         }),
-        el("div", {}, `NED ${pos} m · `, el("span", { class: `battery ${low ? `sev-${severity(low)}` : ""}`, text: `battery ${battery}` })),
+        el("div", { class: "telemetry" }, telemetryText(st), " · ", el("span", { class: `battery ${low ? `sev-${severity(low)}` : ""}`, text: `battery ${battery}` })),
+        el("div", { class: "muted small-text target", text: targetText(st) }),
       );
       return card;
     }),
@@ -406,9 +433,11 @@ export function mount(container) {
   raf = requestAnimationFrame(frame);
   showModel();
   offModel = on("model", () => showModel());
+  ageTimer = window.setInterval(() => (seenVersion = -1), 1000); // ages keep counting
 }
 
 export function unmount() {
+  clearInterval(ageTimer);
   offModel?.();
   offModel = null;
   cancelAnimationFrame(raf);

@@ -202,6 +202,7 @@ class MavlinkLink(MavlinkActions):
                 battery_voltage=tel.battery_voltage,
                 global_position=list(tel.global_position) if tel.global_position else None,
                 position_target=_rounded(tel.position_target),
+                heard_age_s=round(max(time.monotonic() - tel.received, 0.0), 3),
             )
         )
 
