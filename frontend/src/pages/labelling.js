@@ -5,6 +5,7 @@ import { api, isSupervisor, session } from "../api.js";
 import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
 import { on } from "../ws.js";
+import { checkNumber, errorText } from "../forms.js";
 
 const W = 480;
 const H = 270;
@@ -87,6 +88,17 @@ async function refreshList() {
 }
 
 async function record() {
+  const form = session.config.recording_form || {};
+  const problems = [];
+  for (const [name, input] of [["frames", q("input.frames")], ["countdown_s", q("input.countdown")]]) {
+    const problem = form[name] ? checkNumber(name, form[name], input.value) : null;
+    input.classList.toggle("invalid", Boolean(problem));
+    if (problem) problems.push(problem);
+  }
+  if (problems.length) {
+    status(problems.join(" "), "error");
+    return;
+  }
   const body = {
     stream: q("select.stream").value,
     frames: Number(q("input.frames").value),
@@ -98,7 +110,7 @@ async function record() {
     recordingId = rec.id;
     status(`Get ready: recording in ${body.countdown_s} s…`, "warn");
   } catch (err) {
-    status(err.message, "error");
+    status(errorText(err), "error");
   }
 }
 
@@ -138,8 +150,8 @@ export function mount(container) {
         "div",
         { class: "row" },
         el("label", {}, "Stream ", streams),
-        el("label", {}, "Frames ", el("input", { class: "frames", type: "number", min: "1", max: "900", value: "60" })),
-        el("label", {}, "Countdown (s) ", el("input", { class: "countdown", type: "number", min: "0", max: "30", step: "0.5", value: "3" })),
+        el("label", {}, "Frames ", el("input", { class: "frames", type: "number", step: "1", value: String(session.config.recording_form?.frames?.default ?? 60) })),
+        el("label", {}, "Countdown (s) ", el("input", { class: "countdown", type: "number", step: "0.5", value: String(session.config.recording_form?.countdown_s?.default ?? 3) })),
         el("label", {}, "Gesture ", gestures),
         recordBtn,
       ),
@@ -170,6 +182,12 @@ export function mount(container) {
     ),
   );
   offRecording = on("recording", onRecording);
+  for (const input of [q("input.frames"), q("input.countdown")]) {
+    input.addEventListener("input", () => {
+      input.classList.remove("invalid");
+      if (q(".rec-status").classList.contains("error")) status("");
+    });
+  }
   refreshList().catch((err) => status(err.message, "error"));
 }
 

@@ -12,6 +12,7 @@ import {
 import { api, isSupervisor, session } from "../api.js";
 import { el } from "../dom.js";
 import { on } from "../ws.js";
+import { checkNumber, errorText } from "../forms.js";
 
 Chart.register(LineController, LineElement, PointElement, LinearScale, Legend, Tooltip);
 
@@ -294,10 +295,20 @@ async function startRun(ev) {
   ev.preventDefault();
   const f = new FormData(ev.target);
   const body = {};
+  const problems = [];
   for (const [name, spec] of formFields()) {
     if (spec.type === "boolean") body[name] = f.get(name) === "on";
     else if (spec.enum) body[name] = f.get(name);
-    else body[name] = Number(f.get(name));
+    else {
+      const problem = checkNumber(name, spec, f.get(name));
+      ev.target.querySelector(`[name=${name}]`)?.classList.toggle("invalid", Boolean(problem));
+      if (problem) problems.push(problem);
+      body[name] = Number(f.get(name));
+    }
+  }
+  if (problems.length) {
+    setStatus(problems.join(" "), "error");
+    return;
   }
   try {
     const res = await api("/training/runs", { method: "POST", body });
@@ -306,7 +317,7 @@ async function startRun(ev) {
     resetCharts(`Run ${res.id}: starting`);
     refreshRuns();
   } catch (err) {
-    setStatus(`${err.status === 403 ? "Forbidden: " : ""}${err.message}`, "error");
+    setStatus(`${err.status === 403 ? "Forbidden: " : ""}${errorText(err)}`, "error");
   }
 }
 
@@ -333,7 +344,7 @@ export function mount(container) {
   root = container;
   const form = el(
     "form",
-    { class: "card start-run" },
+    { class: "card start-run", novalidate: "" },
     el("h2", { text: "Start a federated run" }),
     el(
       "div",
@@ -344,6 +355,11 @@ export function mount(container) {
     el("p", { class: "train-status" }),
   );
   form.addEventListener("submit", startRun);
+  // A message about the form goes once it is being corrected.
+  form.addEventListener("input", (ev) => {
+    ev.target.classList?.remove("invalid");
+    if (q(".train-status").classList.contains("error")) setStatus("");
+  });
   root.append(
     form,
     el(
