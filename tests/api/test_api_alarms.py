@@ -29,8 +29,10 @@ def test_battery_and_failsafe_alarms(api: Api, caplog: pytest.LogCaptureFixture)
         ("battery_low", "critical", True),
     ]
     assert "battery 20%" in alarms[0].message and "battery 10%" in alarms[1].message
-    # The autopilot lands on its own: a failsafe, critical.
-    api.bus.publish(_state("main", 9.0, mode="LAND"))
+    # The autopilot lands on its own: a failsafe, critical (as the simulator reports it:
+    # "landing" a message before the mode says LAND).
+    api.bus.publish(_state("main", 9.0, landed="landing"))
+    api.bus.publish(_state("main", 9.0, mode="LAND", landed="landing"))
     assert alarms[-1].kind == "failsafe_landing" and alarms[-1].severity == "critical"
     assert "LAND on its own" in alarms[-1].message
     # A landing commanded through the console is no failsafe.

@@ -122,7 +122,9 @@ class AlarmMonitor:
                 ))  # fmt: skip
             if mode:
                 w.mode = mode
-            w.flying = s.landed == "in_air"
+            # Climbing and descending count: a failsafe can fire during the take-off, and
+            # the vehicle may report "landing" a message before its mode says LAND.
+            w.flying = s.landed in ("in_air", "takeoff", "landing")
         return out
 
     @staticmethod
