@@ -63,3 +63,24 @@ def small_checkpoint(tmp_path_factory, laser_dir: Path) -> Path:
     )  # fmt: skip
     assert result.exit_code == 0, result.output
     return out
+
+
+@pytest.fixture(scope="session")
+def degraded_checkpoint(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The shipped checkpoint with Gaussian noise (half each tensor's spread, seed 0) on
+    its weights: a real checkpoint the engine runs, measurably worse (0.77 against 0.98
+    window accuracy on the console's synthetic held-out set; wave_off recall 0.64 against
+    0.94), standing in for a poorly trained candidate in promotion tests."""
+    import torch
+
+    from proxima.gesture.classifier import default_checkpoint
+
+    blob = torch.load(default_checkpoint(), map_location="cpu", weights_only=True)
+    gen = torch.Generator().manual_seed(0)
+    for k, v in blob["state_dict"].items():
+        if v.is_floating_point() and v.numel() > 1:
+            w = v.float()
+            blob["state_dict"][k] = (w + 0.5 * w.std() * torch.randn(w.shape, generator=gen)).half()
+    path = tmp_path_factory.mktemp("degraded") / "gesture-degraded.pt"
+    torch.save(blob, path)
+    return path

@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-from proxima.api.events import RecordingEvent, ThumbnailEvent
+from proxima.api.events import ModelEvent, RecordingEvent, ThumbnailEvent
 from proxima.drone.events import CommandResultEvent, DroneAlarmEvent, DroneStateEvent
 from proxima.federated.events import TrainingRoundEvent, TrainingRunEvent
 from proxima.types import Event
@@ -120,6 +120,7 @@ EVENT_TYPES: Mapping[str, type[Event]] = _registry(
     TrainingRunEvent,
     RecordingEvent,
     ThumbnailEvent,
+    ModelEvent,
 )
 
 

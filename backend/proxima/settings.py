@@ -111,6 +111,12 @@ class ServerSettings(_Section):
     logins are slowed down: after `login_free_failures` failures of one user name or one
     client address, each further one blocks that key `login_backoff_s`, doubling, at most
     `login_backoff_max_s`.
+
+    Promoting a model is refused, unless overridden with a reason, when its accuracy on
+    the console's held-out set is under `promotion_min_accuracy` or more than
+    `promotion_tolerance` below the model in use (overall or on wave_off, the abort).
+    A drone's battery raises a warning alarm at `battery_warn_pct` and a critical one at
+    `battery_critical_pct`.
     """
 
     host: str = "127.0.0.1"
@@ -129,6 +135,10 @@ class ServerSettings(_Section):
     login_free_failures: int = Field(5, ge=1, le=100)
     login_backoff_s: float = Field(1.0, gt=0, le=60)
     login_backoff_max_s: float = Field(300.0, gt=0, le=3600)
+    promotion_min_accuracy: float = Field(0.8, ge=0, le=1)
+    promotion_tolerance: float = Field(0.02, ge=0, le=1)
+    battery_warn_pct: float = Field(20.0, ge=0, le=100)
+    battery_critical_pct: float = Field(10.0, ge=0, le=100)
 
     @model_validator(mode="after")
     def _check_tls(self) -> ServerSettings:
@@ -140,6 +150,8 @@ class ServerSettings(_Section):
                 raise ValueError(f"{name}: no such file: {path}")
         if self.login_backoff_max_s < self.login_backoff_s:
             raise ValueError("login_backoff_max_s must be at least login_backoff_s")
+        if self.battery_critical_pct > self.battery_warn_pct:
+            raise ValueError("battery_critical_pct must be at most battery_warn_pct")
         return self
 
     @property

@@ -3,6 +3,7 @@ import "./style.css";
 import { api, ApiError, isSupervisor, session, setUnauthorizedHandler } from "./api.js";
 import { connect, disconnect, onStatus } from "./ws.js";
 import { setupEstop } from "./estop.js";
+import { setupAlarms } from "./alarms.js";
 import * as live from "./pages/live.js";
 import * as training from "./pages/training.js";
 import * as labelling from "./pages/labelling.js";
@@ -135,6 +136,7 @@ setUnauthorizedHandler(() => {
 
 window.addEventListener("hashchange", route);
 setupEstop();
+setupAlarms();
 
 if (session.token) {
   start().catch(() => {

@@ -15,6 +15,7 @@ export const MESSAGE_TYPES = Object.freeze([
   "training_run",
   "recording",
   "thumbnail",
+  "model",
 ]);
 
 /**
@@ -36,6 +37,7 @@ export const MESSAGE_TYPES = Object.freeze([
  *   "training_run": TrainingRunEvent & Stamped,
  *   "recording": RecordingEvent & Stamped,
  *   "thumbnail": ThumbnailEvent & Stamped,
+ *   "model": ModelEvent & Stamped,
  * }} MessageMap
  */
 /** @typedef {MessageMap[keyof MessageMap]} Message */
@@ -73,6 +75,30 @@ export const MESSAGE_TYPES = Object.freeze([
  */
 
 /**
+ * One row of the durable command log (`proxima.store.command_log`): a command's
+ * whole life cycle, times in ISO 8601 UTC.
+ * @typedef {object} CommandLogRow
+ * @property {number} id
+ * @property {string | null} created_at
+ * @property {string} drone
+ * @property {string} source
+ * @property {string} command
+ * @property {string} stream
+ * @property {number | null} gesture_t
+ * @property {number | null} confidence
+ * @property {string} action
+ * @property {string} status
+ * @property {string} reason
+ * @property {string | null} ack
+ * @property {number} attempts
+ * @property {number | null} ack_latency_ms
+ * @property {string | null} outcome
+ * @property {string | null} sent_at
+ * @property {string | null} acked_at
+ * @property {string | null} completed_at
+ */
+
+/**
  * What became of one command: refused by safety, sent and acknowledged (or not),
  * and its outcome once known (reached, landed, ...). `log_id` is its command-log row.
  * @typedef {object} CommandResultEvent
@@ -102,6 +128,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {string} kind
  * @property {string} message
  * @property {boolean} active
+ * @property {string} severity
  */
 
 /**
@@ -138,6 +165,8 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {number[] | null} global_position
  * @property {number[] | null} position_target
  * @property {boolean} gesture_control
+ * @property {number | null} heard_age_s
+ * @property {boolean} stopped
  */
 
 /**
@@ -171,6 +200,8 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {StreamOut[]} streams
  * @property {DroneOut[]} drones
  * @property {LiveCommand[]} commands
+ * @property {CommandLogRow[]} command_log
+ * @property {DroneAlarmEvent[]} alarms
  */
 
 /**
@@ -199,6 +230,19 @@ export const MESSAGE_TYPES = Object.freeze([
  */
 
 /**
+ * The live engine's model changed: `action` is promote, rollback or restore (at
+ * start, the model promoted before the restart); `checkpoint` is its name in models/.
+ * @typedef {object} ModelEvent
+ * @property {number} t
+ * @property {string} stream
+ * @property {"model"} type
+ * @property {string} checkpoint
+ * @property {string} previous
+ * @property {string} action
+ * @property {string} by
+ */
+
+/**
  * @typedef {object} PasswordChange
  * @property {string} old_password
  * @property {string} new_password at least 10 characters, not a well-known password
@@ -213,6 +257,13 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {number[][]} xyz
  * @property {number[]} visibility
  * @property {string} sight
+ */
+
+/**
+ * A promotion's override: needed (non-empty) when the candidate is below the minimum
+ * accuracy or the model in use on the held-out set.
+ * @typedef {object} PromoteRequest
+ * @property {string | null} [override_reason]
  */
 
 /**
@@ -311,6 +362,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {string} stream
  * @property {boolean} driving
  * @property {StreamLive} live
+ * @property {string} handover_reason
  * @property {"stream_live"} type
  */
 
@@ -326,6 +378,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {boolean} configured
  * @property {boolean} driving
  * @property {StreamLive} live
+ * @property {string} handover_reason
  */
 
 /**

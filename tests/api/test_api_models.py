@@ -45,7 +45,9 @@ def test_list_and_promote_into_the_live_engine(tmp_path: Path, checkpoint_path: 
             assert by_name["runs/fedavg-r5.pt"]["card"]["content"].startswith("# FedAvg")
             before = runtime.engine.pipelines["front"].classifier
 
-            r = httpx.post(f"{server.url}/api/models/runs/fedavg-r5.pt/promote", headers=h)
+            r = httpx.post(
+                f"{server.url}/api/models/runs/fedavg-r5.pt/promote", headers=h, timeout=120
+            )
             assert r.status_code == 200, r.text
             assert r.json()["streams"] == ["front"] and r.json()["pending"] == []
             after = runtime.engine.pipelines["front"].classifier
@@ -55,10 +57,10 @@ def test_list_and_promote_into_the_live_engine(tmp_path: Path, checkpoint_path: 
             assert active == ["runs/fedavg-r5.pt"]
 
             # Not a checkpoint the engine can run: refused by its state (409), not the schema.
-            r = httpx.post(f"{server.url}/api/models/broken.pt/promote", headers=h)
+            r = httpx.post(f"{server.url}/api/models/broken.pt/promote", headers=h, timeout=120)
             assert r.status_code == 409 and "broken.pt" in r.json()["detail"]
             assert runtime.engine.pipelines["front"].classifier is after
-            r = httpx.post(f"{server.url}/api/models/..%2Fc.db/promote", headers=h)
+            r = httpx.post(f"{server.url}/api/models/..%2Fc.db/promote", headers=h, timeout=120)
             assert r.status_code == 404
     finally:
         runtime.close()

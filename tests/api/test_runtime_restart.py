@@ -9,6 +9,7 @@ from pathlib import Path
 from api_helpers import laser_clip
 
 from proxima.api.runtime import build_runtime
+from proxima.events import ArmingEvent
 from proxima.settings import Settings
 
 
@@ -42,5 +43,37 @@ def test_a_restarted_engine_keeps_the_promoted_model_and_the_promoter(
         assert fresh.classifier("front") is not promoted  # the promoter follows the engine
         assert old.classifier("front") is promoted
         assert runtime.promoter.active_checkpoint() == str(checkpoint_path)
+    finally:
+        runtime.close()
+
+
+def test_a_restarted_engine_is_shown_disarmed(tmp_path: Path) -> None:
+    """Finding 2 of issue 26: after the loop restarted the engine, ARMED stayed on screen.
+    A replayed have_command arms the stream; the restart publishes the fresh engine's
+    disarmed state, which the console's live state (what every tile shows) follows."""
+    settings = Settings.load(
+        config=None,
+        streams=[{"name": "front", "uri": f"replay:{laser_clip('have_command_f')}@30"}],
+        server={"db_path": str(tmp_path / "c.db")},
+    )
+    runtime = build_runtime(
+        settings, engine=True, drones=False, view=False, training=False, realtime=False
+    )
+    assert runtime.engine is not None, runtime.notes
+    try:
+        live = runtime.app.state.console.live
+        seen: list[tuple[bool, str, bool]] = []  # (armed, reason, what the live state says)
+
+        def on_event(event: object) -> None:  # after LiveState's listener (made first)
+            if isinstance(event, ArmingEvent):
+                seen.append((event.armed, event.reason, live.streams()["front"].armed))
+
+        runtime.bus.add_listener(on_event)
+        assert runtime.engine.wait(60)
+        assert live.streams()["front"].armed, live.streams()["front"]
+        runtime.restart_engine()
+        restart = [i for i, s in enumerate(seen) if "engine restarted" in s[1]]
+        assert restart and any(s[0] for s in seen[: restart[0]]), seen
+        assert seen[restart[0]][0] is False and seen[restart[0]][2] is False
     finally:
         runtime.close()

@@ -23,10 +23,14 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
     try:
         login(page, console.url)
         page.click("nav a[data-page=labelling]")
+        # An empty list says so (issue 26, finding 9); the chosen stream previews live.
+        page.wait_for_selector("table.samples .empty-list:has-text('No samples yet')")
         page.select_option("select.stream", "front")
+        page.wait_for_function("() => document.querySelector('canvas.preview').dataset.poseT")
         page.fill("input.frames", "45")
         page.fill("input.countdown", "1.5")
-        page.select_option("select.gesture", "land_direction")
+        # A wrong label on purpose: the model's reading must disagree and say so.
+        page.select_option("select.gesture", "move_upward")
         page.click("button.record")
         page.wait_for_selector(".rec-status.countdown")  # the countdown is shown first
         page.wait_for_selector(".review-box:not([hidden])", timeout=20000)
@@ -37,12 +41,34 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
         page.wait_for_function(
             "f => document.querySelector('canvas.review').dataset.frame !== f", arg=first
         )
+        sample_id = int(title.split(":")[0].split()[-1])
+        token = page.evaluate("() => sessionStorage.getItem('proxima.token')")
+        import httpx
+
+        read = httpx.get(
+            f"{console.url}/api/samples/{sample_id}/reading",
+            headers={"Authorization": f"Bearer {token}"},
+            timeout=60,
+        ).json()
+        assert read["frames"] == 45 and read["padded"] and read["gesture"] != "move_upward", read
+        page.wait_for_selector(f".reading.warn:has-text('reads this as {read['gesture']}')")
+        assert "not move_upward" in page.inner_text(".reading")
+        page.select_option("select.gesture", "land_direction")
+        if read["gesture"] == "land_direction":
+            page.wait_for_selector(".reading.ok:has-text('reads this as land_direction')")
+        else:
+            page.wait_for_selector(".reading.warn:has-text('not land_direction')")
         screenshot(page, "labelling")
         page.click("button.keep")
         row = page.wait_for_selector("table.samples tbody tr.st-kept")
         assert row.query_selector(".label").inner_text() == "land_direction"
         cells = [c.inner_text() for c in row.query_selector_all("td")]
         assert cells[2:] == ["front", "main", "land_direction", "kept", "45"]
+        assert page.is_disabled("button.keep")  # kept once is kept
+        # The gesture chosen stays chosen after leaving the page.
+        page.click("nav a[data-page=live]")
+        page.click("nav a[data-page=labelling]")
+        assert page.eval_on_selector("select.gesture", "s => s.value") == "land_direction"
         with console.runtime.app.state.console.sessions() as db:
             kept = kept_samples(db, "main")
         assert [(k.label, k.xyz.shape) for k in kept] == [("land_direction", (45, 33, 3))]

@@ -88,6 +88,23 @@ def test_tiles_follow_the_engine(page, tmp_path: Path, checkpoint: Path) -> None
             what="the label to change with new classifications",
         )
         assert page.inner_text(f"{tile} .value.state") == "live"
+        # Which drone is commanded, and why (issue 26, finding 6): front drives (the
+        # main camera sees the operator), left is standby; the badges explain
+        # themselves; gesture control was never armed (no have_command in these
+        # clips), so the summary says no drone is driving.
+        page.wait_for_selector(f"{tile} .driving-badge")
+        assert "command main now" in page.get_attribute(f"{tile} .driving-badge", "title")
+        assert "operator" in page.get_attribute(f"{tile} .driving-badge", "title")
+        assert "the main camera" in page.get_attribute(f"{tile} .b-priority", "title")
+        side = "article.tile[data-stream=left]"
+        page.wait_for_selector(f"{side} .standby-badge")
+        assert "if front loses the operator" in page.get_attribute(
+            f"{side} .standby-badge", "title"
+        )
+        assert "priority 1" in page.get_attribute(f"{side} .b-priority", "title")
+        who = page.inner_text(".who-drives")
+        assert who.startswith("No drone driving: gesture control disarmed"), who
+        assert "front would drive main" in who and "left is standby, priority 1" in who
         screenshot(page, "live")
     finally:
         gestures.close()

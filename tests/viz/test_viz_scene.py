@@ -115,5 +115,19 @@ def test_viser_serves_the_scene_on_loopback(laser_dir) -> None:  # type: ignore[
         time.sleep(0.3)
         assert view.model.snapshot()["drones"]["main"]["trail"].shape[0] == 10
         assert "/trails/main" in view._handles and "/drones/main" in view._handles
+        # Issue 26, finding 8: the marker is smaller than a 1 m move, even driving.
+        from proxima.viz.scene import DRIVING_SCALE, DRONE_RADIUS_M
+
+        assert 2 * DRONE_RADIUS_M * DRIVING_SCALE < 1.0
+        assert view._handles["/drones/main"].scale in (1.0, DRIVING_SCALE)
+        # Labels of drones side by side are stacked, not drawn over each other.
+        bus.publish(DroneStateEvent(t=11.0, drone="second", link="ok", position=[0.0, 0.3, -2.0]))
+        deadline = time.monotonic() + 5
+        while "/drones/second/label" not in view._handles and time.monotonic() < deadline:
+            time.sleep(0.05)
+        heights = {
+            n: float(view._handles[f"/drones/{n}/label"].position[2]) for n in ("main", "second")
+        }
+        assert abs(heights["main"] - heights["second"]) >= 0.3, heights
     finally:
         view.stop()

@@ -184,6 +184,14 @@ def create_app(
         docs_url=None,
         redoc_url=None,
     )
+    from proxima.api.alarms import AlarmMonitor
+
+    console.alarms = AlarmMonitor(
+        bus,
+        settings.server.battery_warn_pct,
+        settings.server.battery_critical_pct,
+        audit=console.audit,
+    )
     app.state.console = console
     install_error_handlers(app)
     for router in ROUTERS:

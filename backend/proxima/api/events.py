@@ -1,5 +1,5 @@
-"""Events the console itself puts on the bus: sample recording progress and JPEG
-thumbnails of camera streams."""
+"""Events the console itself puts on the bus: sample recording progress, JPEG
+thumbnails of camera streams and the live model changing."""
 
 from __future__ import annotations
 
@@ -31,3 +31,15 @@ class ThumbnailEvent(Event):
     width: int
     height: int
     type: str = field(default="thumbnail", init=False)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ModelEvent(Event):
+    """The live engine's model changed: `action` is promote, rollback or restore (at
+    start, the model promoted before the restart); `checkpoint` is its name in models/."""
+
+    checkpoint: str
+    previous: str = ""
+    action: str
+    by: str = ""
+    type: str = field(default="model", init=False)

@@ -72,6 +72,14 @@ class EmergencyStop(Protocol):
         """
         ...
 
+    def resume(self, drone: str, user: str) -> dict[str, Any]:
+        """Clear a confirmed stop: gesture control may be armed again (have_command).
+
+        Raises:
+            KeyError: unknown drone.  ValueError: the drone is not stopped.
+        """
+        ...
+
 
 @runtime_checkable
 class ModelPromoter(Protocol):

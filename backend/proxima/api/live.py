@@ -61,6 +61,9 @@ class StreamLiveMessage:
     stream: str
     driving: bool
     live: StreamLive
+    # The newest handover's reason (operator_acquired, higher_priority_sees_operator,
+    # operator_lost, ...): why the driving stream drives, or why none does.
+    handover_reason: str = ""
     type: Literal["stream_live"] = "stream_live"
 
 
@@ -87,6 +90,7 @@ class LiveState:
         self._drones: dict[str, DroneStateEvent] = {}
         self._commands: deque[LiveCommand] = deque(maxlen=command_history)
         self._driving: str | None = None
+        self._handover_reason = ""
         self._watchers: list[Callable[[str], None]] = []
         self.active = True
         bus.add_listener(self._on_event)
@@ -130,6 +134,7 @@ class LiveState:
                 return self._update(event.stream, state=event.state, state_detail=event.detail)
             case HandoverEvent():
                 before, self._driving = self._driving, event.to_stream or None
+                self._handover_reason = event.reason
                 return tuple(dict.fromkeys(n for n in (before, self._driving) if n))
             case CommandEvent():
                 entry = LiveCommand(
@@ -161,7 +166,18 @@ class LiveState:
         """The hub's `stream_live` message for `name`, as of now."""
         with self._lock:
             live = self._streams.get(name, StreamLive())
-            return StreamLiveMessage(stream=name, driving=self._driving == name, live=live)
+            return StreamLiveMessage(
+                stream=name,
+                driving=self._driving == name,
+                live=live,
+                handover_reason=self._handover_reason,
+            )
+
+    @property
+    def handover_reason(self) -> str:
+        """Why the driving stream drives (or none does), from the newest handover."""
+        with self._lock:
+            return self._handover_reason
 
     def streams(self) -> dict[str, StreamLive]:
         with self._lock:

@@ -4,6 +4,7 @@ it: every stream's classifier is swapped through the engine's own hook
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from pathlib import Path
@@ -13,6 +14,8 @@ from proxima.types import GESTURES
 
 if TYPE_CHECKING:
     from proxima.engine import Engine
+
+log = logging.getLogger(__name__)
 
 # How long `promote` waits for the streams to confirm the swap: a running stream does at
 # its next frame; one without frames right now (a camera reconnecting) does later.
@@ -70,3 +73,59 @@ class EnginePromoter:
         deadline = time.monotonic() + CONFIRM_TIMEOUT_S
         pending = [s.stream for s in swaps if not s.wait(max(deadline - time.monotonic(), 0.0))]
         return {"streams": sorted(names), "window": clf.window, "pending": sorted(pending)}
+
+
+# The audit actions that changed the live model; the newest `ok` one names the model in
+# use, so the history and the model kept over a restart come from the audit trail.
+CHANGE_ACTIONS = ("model.promote", "model.rollback")
+
+
+def promotion_history(audit: Any, limit: int = 50) -> list[dict[str, Any]]:
+    """The live model's changes, newest first: when, who, what (`action`), the model
+    (`checkpoint`, its name in models/), the one it replaced (`previous`), the figures
+    both had and the override reason, from the audit log's ok promote/rollback rows."""
+    rows = audit.query(action="model", outcome="ok", limit=500)
+    out = []
+    for r in rows:
+        if r.action not in CHANGE_ACTIONS:
+            continue
+        out.append(
+            {
+                "id": r.id,
+                "ts": r.ts,
+                "by": r.actor,
+                "action": r.action.split(".", 1)[1],
+                "checkpoint": r.target,
+                "previous": r.detail.get("previous_name") or "",
+                "figures": r.detail.get("figures"),
+                "previous_figures": r.detail.get("previous_figures"),
+                "override_reason": r.detail.get("override_reason") or "",
+            }
+        )
+        if len(out) >= limit:
+            break
+    return out
+
+
+def restore_promoted(promoter: EnginePromoter, audit: Any, models_dir: Path) -> str | None:
+    """Put the model promoted before a restart back into the engine (the newest ok
+    change in the audit log), so a restart keeps the supervisor's choice. Returns its
+    name, or None when there was none, it is already running, or it is gone (logged)."""
+    changes = promotion_history(audit, limit=1)
+    if not changes:
+        return None
+    name = changes[0]["checkpoint"]
+    path = Path(name) if Path(name).is_absolute() else Path(models_dir) / name
+    active = promoter.active_checkpoint()
+    if active and Path(active).resolve() == path.resolve():
+        return None
+    if not path.is_file():
+        log.warning("model %s promoted before the restart is gone; running %s", name, active)
+        return None
+    try:
+        promoter.promote(str(path))
+    except ValueError as exc:
+        log.warning("could not restore the promoted model %s: %s", name, exc)
+        return None
+    log.info("restored the promoted model %s", name)
+    return name

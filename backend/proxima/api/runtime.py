@@ -79,6 +79,19 @@ class ConsoleRuntime:
         if old is None:
             raise RuntimeError("no live engine runs in this console")
         old.stop()
+        # The new engine starts disarmed: say so on the bus, so the drones' gesture
+        # control and every tile follow (the old engine's last word may be "armed").
+        from proxima.events import ArmingEvent
+
+        for spec in old.specs:
+            self.bus.publish(
+                ArmingEvent(
+                    t=0.0,
+                    stream=spec.name,
+                    armed=False,
+                    reason="engine restarted: have_command again",
+                )
+            )
         engine = start_engine(
             self.settings, self.bus, self.realtime, old.classifier(old.specs[0].name)
         )
@@ -205,6 +218,12 @@ def build_runtime(
             from proxima.api.promote import EnginePromoter
 
             rt.promoter = EnginePromoter(rt.engine, settings.engine.checkpoint)
+            from proxima.api.promote import restore_promoted
+            from proxima.store.audit import AuditLog
+
+            restored = restore_promoted(rt.promoter, AuditLog(db), settings.server.models_dir)
+            if restored:
+                rt.notes.append(f"live engine runs {restored}, promoted before the restart")
         except Exception as exc:
             rt.notes.append(f"live engine not started: {type(exc).__name__}: {exc}")
     elif not settings.streams:

@@ -11,7 +11,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from proxima.api.live import LiveCommand, StreamLive
 from proxima.api.recorder import MAX_COUNTDOWN_S, MAX_FRAMES
-from proxima.drone.events import DroneStateEvent
+from proxima.drone.events import DroneAlarmEvent, DroneStateEvent
 from proxima.federated.config import (
     BatchSize,
     FractionFit,
@@ -97,6 +97,7 @@ class StreamOut(BaseModel):
     configured: bool
     driving: bool
     live: StreamLive
+    handover_reason: str = ""  # the newest handover's (see StreamLiveMessage)
 
 
 class DroneOut(BaseModel):
@@ -112,6 +113,30 @@ class DroneOut(BaseModel):
     state: DroneStateEvent | None
 
 
+class CommandLogRow(BaseModel):
+    """One row of the durable command log (`proxima.store.command_log`): a command's
+    whole life cycle, times in ISO 8601 UTC."""
+
+    id: int
+    created_at: str | None
+    drone: str
+    source: str
+    command: str
+    stream: str
+    gesture_t: float | None
+    confidence: float | None
+    action: str
+    status: str  # pending, sent, refused, failed, ignored, done
+    reason: str
+    ack: str | None
+    attempts: int
+    ack_latency_ms: float | None
+    outcome: str | None
+    sent_at: str | None
+    acked_at: str | None
+    completed_at: str | None
+
+
 class Hello(BaseModel):
     """The WebSocket's first message: who is connected and the console's live picture
     (what `GET /streams`, `/drones` and `/commands/live` return), before any event."""
@@ -122,6 +147,8 @@ class Hello(BaseModel):
     streams: list[StreamOut]
     drones: list[DroneOut]
     commands: list[LiveCommand]  # newest first
+    command_log: list[CommandLogRow]  # the durable log, newest first (emergency stops too)
+    alarms: list[DroneAlarmEvent]  # raised and cleared since start, newest first
 
 
 class RecordingRequest(_In):
@@ -178,6 +205,13 @@ class TrainingStart(_In):
 
 # The form's fields, in the order the Training page shows them.
 TRAINING_FORM: tuple[str, ...] = tuple(TrainingStart.model_fields)
+
+
+class PromoteRequest(_In):
+    """A promotion's override: needed (non-empty) when the candidate is below the minimum
+    accuracy or the model in use on the held-out set."""
+
+    override_reason: str | None = Field(None, max_length=500)
 
 
 class EstopConfirm(_In):

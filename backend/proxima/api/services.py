@@ -36,6 +36,7 @@ class Console:
     # The viser server's port on viser_host when one runs: only the console's /viser/
     # proxy connects to it; browsers are never told.
     viz_port: int | None = None
+    alarms: Any = None  # proxima.api.alarms.AlarmMonitor
 
     @cached_property
     def command_log(self) -> Any:
@@ -43,3 +44,11 @@ class Console:
         from proxima.store.command_log import CommandLog
 
         return CommandLog(self.db_engine)
+
+    @cached_property
+    def evaluator(self) -> Any:
+        """Figures of checkpoints on the held-out set (proxima.api.model_eval), its clips
+        beside the database."""
+        from proxima.api.model_eval import ModelEvaluator
+
+        return ModelEvaluator(self.settings.server.db_path.parent / "console-eval")

@@ -31,6 +31,8 @@ class DroneStateEvent(Event):
     global_position: list[float] | None = None  # [lat, lon, alt AMSL]
     position_target: list[float] | None = None
     gesture_control: bool = False
+    heard_age_s: float | None = None  # seconds since the vehicle's newest message
+    stopped: bool = False  # emergency-stopped and not resumed: no gesture control
     type: str = field(default="drone_state", init=False)
 
 
@@ -61,4 +63,5 @@ class DroneAlarmEvent(Event):
     kind: str
     message: str
     active: bool = True
+    severity: str = "warning"  # "warning" or "critical"
     type: str = field(default="drone_alarm", init=False)

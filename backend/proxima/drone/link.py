@@ -107,6 +107,7 @@ class DroneLink(ABC):
 
     name: str
     gesture_control: bool = False  # set by the controller; shown in the link's state
+    emergency_stopped: bool = False  # likewise: stopped until a supervisor resumes it
 
     @abstractmethod
     def connect(self, timeout: float = 10.0) -> None:

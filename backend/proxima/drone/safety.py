@@ -82,14 +82,39 @@ class SafetyGate:
         self.clock = clock
         self._lock = threading.Lock()
         self._armed: set[str] = set()
+        # Emergency-stopped drones: gesture control cannot arm them until a supervisor
+        # resumes them (`clear_stop`).
+        self._stopped: set[str] = set()
         self._last_sent: dict[str, float] = {}
         self._operator_seen: dict[str, float] = {}
         self._estops: dict[str, EmergencyStopRequest] = {}
 
     # --- gesture control --------------------------------------------------------------
-    def arm_control(self, drone: str) -> None:
+    def arm_control(self, drone: str) -> bool:
+        """Arm gesture control of `drone`; False (nothing armed) while it is stopped."""
         with self._lock:
+            if drone in self._stopped:
+                return False
             self._armed.add(drone)
+            return True
+
+    def mark_stopped(self, drone: str) -> None:
+        """An emergency stop was confirmed: disarm it and keep it disarmed."""
+        with self._lock:
+            self._stopped.add(drone)
+            self._armed.discard(drone)
+
+    def clear_stop(self, drone: str) -> bool:
+        """A supervisor resumed `drone`; returns whether it was stopped. Gesture control
+        stays disarmed until the next have_command."""
+        with self._lock:
+            was = drone in self._stopped
+            self._stopped.discard(drone)
+            return was
+
+    def is_stopped(self, drone: str) -> bool:
+        with self._lock:
+            return drone in self._stopped
 
     def disarm_control(self, drone: str) -> None:
         with self._lock:

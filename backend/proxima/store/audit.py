@@ -35,12 +35,16 @@ class AuditAction(StrEnum):
     USER_DISABLE = "user.disable"
     DRONE_STOP_REQUEST = "drone.stop_request"
     DRONE_STOP = "drone.stop"
+    DRONE_RESUME = "drone.resume"
     MODEL_PROMOTE = "model.promote"
+    MODEL_ROLLBACK = "model.rollback"
     RUN_START = "training.start"
     RUN_CANCEL = "training.cancel"
     RECORDING_START = "sample.record"
     SAMPLE_KEEP = "sample.keep"
     SAMPLE_DELETE = "sample.delete"
+    ALARM_RAISE = "alarm.raise"  # by "console": a derived alarm (api/alarms.py)
+    ALARM_CLEAR = "alarm.clear"
 
 
 class AuditOutcome(StrEnum):

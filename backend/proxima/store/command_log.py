@@ -98,11 +98,15 @@ class CommandLog:
             row = session.get(CommandRecord, row_id)
             return None if row is None else row.to_dict()
 
-    def recent(self, limit: int = 100, drone: str | None = None) -> list[dict[str, Any]]:
-        """The newest rows first."""
+    def recent(
+        self, limit: int = 100, drone: str | None = None, status: str | None = None
+    ) -> list[dict[str, Any]]:
+        """The newest rows first, of one drone and one status when given."""
         query = select(CommandRecord).order_by(CommandRecord.id.desc()).limit(limit)
         if drone is not None:
             query = query.where(CommandRecord.drone == drone)
+        if status is not None:
+            query = query.where(CommandRecord.status == status)
         with self._session() as session:
             return [row.to_dict() for row in session.scalars(query)]
 

@@ -62,6 +62,15 @@ def geofence_segments(
     return np.concatenate(segs).astype(np.float32)
 
 
+# A drone's marker: smaller than the 1 m moves of a gesture, so trails and neighbours
+# stay visible (0.4 m across; the driving one 0.5 m). Labels sit above it, each drone's
+# a little higher than the one before, so drones side by side do not cover each other's.
+DRONE_RADIUS_M = 0.2
+DRIVING_SCALE = 1.25
+LABEL_Z_M = 0.45
+LABEL_STEP_M = 0.35
+
+
 class FleetView:
     """A running viser scene fed by `bus`. `start()` opens the port; `stop()` closes it."""
 
@@ -88,6 +97,11 @@ class FleetView:
 
         self.server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
         self.port = self.server.get_port()
+        # No share button (it would offer a public tunnel) and a control panel that
+        # starts out of the way of the scene.
+        self.server.gui.configure_theme(
+            control_layout="collapsible", show_share_button=False, show_logo=False
+        )
         self._static_scene()
         self._sub = self.bus.subscribe(maxsize=2000, types=VIZ_TYPES)
         self._thread = threading.Thread(target=self._run, name="viz", daemon=True)
@@ -158,15 +172,19 @@ class FleetView:
             sphere = self._handles.get(key)
             if sphere is None:
                 sphere = scene.add_icosphere(
-                    key, radius=0.5, color=color, position=tuple(pos), cast_shadow=False
-                )
+                    key, radius=DRONE_RADIUS_M, color=color, position=tuple(pos),
+                    cast_shadow=False,
+                )  # fmt: skip
                 self._handles[key] = sphere
+                index = sum(
+                    k.endswith("/label") and k.startswith("/drones/") for k in self._handles
+                )
                 self._handles[key + "/label"] = scene.add_label(
-                    key + "/label", name, position=(0.0, 0.0, 0.6)
+                    key + "/label", name, position=(0.0, 0.0, LABEL_Z_M + LABEL_STEP_M * index)
                 )
             sphere.position = tuple(float(v) for v in pos)
             sphere.color = color
-            sphere.scale = 1.6 if driving else 1.0
+            sphere.scale = DRIVING_SCALE if driving else 1.0
             trail = d["trail"]
             if len(trail) >= 2:
                 segs = np.stack([trail[:-1], trail[1:]], axis=1).astype(np.float32)

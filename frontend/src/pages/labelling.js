@@ -5,6 +5,8 @@ import { api, isSupervisor, session } from "../api.js";
 import { el } from "../dom.js";
 import { clear, drawSkeleton } from "../skeleton.js";
 import { on } from "../ws.js";
+import { checkNumber, errorText } from "../forms.js";
+import { state } from "../store.js";
 
 const W = 480;
 const H = 270;
@@ -13,6 +15,9 @@ let offRecording = null;
 let playTimer = 0;
 let current = null; // sample detail under review
 let recordingId = null;
+let reading = null; // the model's reading of the sample under review
+let previewTimer = 0;
+const GESTURE_KEY = "proxima.labelling.gesture";
 
 const q = (sel) => root.querySelector(sel);
 
@@ -39,13 +44,60 @@ function play(sample) {
   }, dt);
 }
 
+// Warn when the model's reading of the take differs from the gesture chosen for it.
+function showReading() {
+  const box = q(".reading");
+  if (!reading || !current || reading.sample !== current.id) {
+    box.textContent = "";
+    return;
+  }
+  const chosen = q("select.gesture").value;
+  const pct = (x) => `${Math.round(100 * x)}%`;
+  const note = reading.padded ? ` (${reading.frames} of its ${reading.window} frames, padded)` : "";
+  if (reading.gesture === chosen) {
+    box.textContent = `${reading.model} reads this as ${chosen} (${pct(reading.confidence)})${note}.`;
+    box.className = "reading ok";
+  } else {
+    box.textContent =
+      `Check the gesture: ${reading.model} reads this as ${reading.gesture} (${pct(reading.confidence)}), ` +
+      `not ${chosen} (${pct(reading.probs[chosen] ?? 0)})${note}. Keep it only if the pose really is ${chosen}.`;
+    box.className = "reading warn";
+  }
+}
+
 async function review(id) {
   current = await api(`/samples/${id}`);
   q(".review-box").hidden = false;
   q(".review-title").textContent =
     `Sample ${current.id}: ${current.n_frames} frames of ${current.stream} for ${current.drone} (${current.status})`;
   if (current.label) q("select.gesture").value = current.label;
+  q("button.keep").disabled = !isSupervisor() || current.status === "kept";
+  reading = null;
+  showReading();
   play(current);
+  try {
+    reading = await api(`/samples/${id}/reading`);
+  } catch (err) {
+    q(".reading").textContent = `No model reading: ${err.message}`;
+    return;
+  }
+  showReading();
+}
+
+// The chosen stream's live skeleton, so the operator sees the pose before recording.
+function preview() {
+  clearInterval(previewTimer);
+  previewTimer = setInterval(() => {
+    if (!root) return;
+    const canvas = q("canvas.preview");
+    const ctx = canvas.getContext("2d");
+    const s = state.streams.get(q("select.stream").value);
+    clear(ctx, W / 2, H / 2);
+    if (s?.pose) {
+      drawSkeleton(ctx, s.pose.xyz, s.pose.visibility, W / 2, H / 2);
+      canvas.dataset.poseT = String(s.pose.t);
+    }
+  }, 100);
 }
 
 async function decide(statusName) {
@@ -57,6 +109,8 @@ async function decide(statusName) {
       body: { status: statusName, label: statusName === "kept" ? label : null },
     });
     status(`Sample ${current.id} ${statusName}${statusName === "kept" ? ` as ${label}` : ""}.`, "ok");
+    current.status = statusName;
+    q("button.keep").disabled = statusName === "kept"; // kept once is kept
     q(".review-title").textContent = q(".review-title").textContent.replace(/\(\w+\)$/, `(${statusName})`);
     await refreshList();
   } catch (err) {
@@ -67,6 +121,10 @@ async function decide(statusName) {
 async function refreshList() {
   const rows = await api("/samples?limit=200");
   const body = q("table.samples tbody");
+  if (!rows.length) {
+    body.replaceChildren(el("tr", {}, el("td", { colspan: "7", class: "muted empty-list", text: "No samples yet: record one above." })));
+    return;
+  }
   body.replaceChildren(
     ...rows.map((s) => {
       const tr = el(
@@ -87,6 +145,17 @@ async function refreshList() {
 }
 
 async function record() {
+  const form = session.config.recording_form || {};
+  const problems = [];
+  for (const [name, input] of [["frames", q("input.frames")], ["countdown_s", q("input.countdown")]]) {
+    const problem = form[name] ? checkNumber(name, form[name], input.value) : null;
+    input.classList.toggle("invalid", Boolean(problem));
+    if (problem) problems.push(problem);
+  }
+  if (problems.length) {
+    status(problems.join(" "), "error");
+    return;
+  }
   const body = {
     stream: q("select.stream").value,
     frames: Number(q("input.frames").value),
@@ -98,7 +167,7 @@ async function record() {
     recordingId = rec.id;
     status(`Get ready: recording in ${body.countdown_s} s…`, "warn");
   } catch (err) {
-    status(err.message, "error");
+    status(errorText(err), "error");
   }
 }
 
@@ -138,13 +207,14 @@ export function mount(container) {
         "div",
         { class: "row" },
         el("label", {}, "Stream ", streams),
-        el("label", {}, "Frames ", el("input", { class: "frames", type: "number", min: "1", max: "900", value: "60" })),
-        el("label", {}, "Countdown (s) ", el("input", { class: "countdown", type: "number", min: "0", max: "30", step: "0.5", value: "3" })),
+        el("label", {}, "Frames ", el("input", { class: "frames", type: "number", step: "1", value: String(session.config.recording_form?.frames?.default ?? 60) })),
+        el("label", {}, "Countdown (s) ", el("input", { class: "countdown", type: "number", step: "0.5", value: String(session.config.recording_form?.countdown_s?.default ?? 3) })),
         el("label", {}, "Gesture ", gestures),
         recordBtn,
       ),
       el("progress", { class: "rec-progress", max: "1", value: "0" }),
       el("p", { class: "rec-status" }),
+      el("div", { class: "preview-box" }, el("h3", { text: "Live preview of the chosen stream" }), el("canvas", { class: "preview frame", width: W / 2, height: H / 2 })),
     ),
     (() => {
       const box = el(
@@ -152,6 +222,7 @@ export function mount(container) {
         { class: "card review-box" },
         el("h2", { class: "review-title" }),
         el("canvas", { class: "review frame", width: W, height: H }),
+        el("p", { class: "reading" }),
         el("div", { class: "row" }, keep, del),
       );
       box.hidden = true;
@@ -170,11 +241,27 @@ export function mount(container) {
     ),
   );
   offRecording = on("recording", onRecording);
+  // The gesture chosen stays chosen (across recordings and visits to the page).
+  const sel = q("select.gesture");
+  const saved = sessionStorage.getItem(GESTURE_KEY);
+  if (saved && [...sel.options].some((o) => o.value === saved)) sel.value = saved;
+  sel.addEventListener("change", () => {
+    sessionStorage.setItem(GESTURE_KEY, sel.value);
+    showReading();
+  });
+  preview();
+  for (const input of [q("input.frames"), q("input.countdown")]) {
+    input.addEventListener("input", () => {
+      input.classList.remove("invalid");
+      if (q(".rec-status").classList.contains("error")) status("");
+    });
+  }
   refreshList().catch((err) => status(err.message, "error"));
 }
 
 export function unmount() {
   clearInterval(playTimer);
+  clearInterval(previewTimer);
   if (offRecording) offRecording();
   root = null;
   current = null;

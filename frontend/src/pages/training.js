@@ -12,6 +12,7 @@ import {
 import { api, isSupervisor, session } from "../api.js";
 import { el } from "../dom.js";
 import { on } from "../ws.js";
+import { checkNumber, errorText } from "../forms.js";
 
 Chart.register(LineController, LineElement, PointElement, LinearScale, Legend, Tooltip);
 
@@ -126,31 +127,153 @@ async function refreshRuns() {
   );
 }
 
+const fmt = (x) => (typeof x === "number" ? x.toFixed(3) : "—");
+const modelPath = (name) => name.split("/").map(encodeURIComponent).join("/");
+
+function fillFigures(tr, f) {
+  tr.querySelector(".acc").textContent = f ? fmt(f.accuracy) : "…";
+  tr.querySelector(".abort").textContent = f ? fmt(f.abort_recall) : "…";
+  if (f) tr.querySelector(".acc").title = `window accuracy on ${f.set_description}`;
+}
+
+// Figures are computed on the server once per checkpoint (a few seconds each): rows
+// without them are filled in one at a time after the table is drawn.
+async function evaluateMissing(rows) {
+  for (const [tr, m] of rows) {
+    if (!root) return;
+    try {
+      const cmp = await api(`/models/${modelPath(m.name)}/evaluation`);
+      fillFigures(tr, cmp.candidate.figures);
+    } catch (err) {
+      tr.querySelector(".acc").textContent = "not evaluable";
+      tr.querySelector(".acc").title = err.message;
+      tr.querySelector(".abort").textContent = "";
+    }
+  }
+}
+
 async function refreshModels() {
   const res = await api("/models");
+  const missing = [];
   q("table.models tbody").replaceChildren(
     ...res.models.map((m) => {
-      const btn = el("button", { class: "promote small", text: m.active ? "active" : "promote" });
+      const btn = el("button", { class: "promote small", text: m.active ? "in use" : "promote…" });
       btn.disabled = m.active || !isSupervisor() || !res.promotion_available;
-      btn.addEventListener("click", async () => {
-        try {
-          await api(`/models/${m.name.split("/").map(encodeURIComponent).join("/")}/promote`, { method: "POST" });
-          setStatus(`Promoted ${m.name} to the live engine.`, "ok");
-          refreshModels();
-        } catch (err) {
-          setStatus(err.message, "error");
-        }
-      });
-      return el(
+      btn.addEventListener("click", () => askPromote(m.name));
+      const tr = el(
         "tr",
-        { "data-model": m.name },
-        el("td", { text: m.name }),
+        { "data-model": m.name, class: m.active ? "active-model" : "" },
+        el("td", { class: "name", text: m.name }),
         el("td", { text: new Date(m.modified * 1000).toLocaleString() }),
+        el("td", { class: "acc" }),
+        el("td", { class: "abort" }),
         el("td", { text: `${Math.round(m.size_bytes / 1024)} KiB` }),
         el("td", {}, btn),
       );
+      fillFigures(tr, m.figures);
+      if (!m.figures) missing.push([tr, m]);
+      return tr;
     }),
   );
+  refreshHistory().catch((err) => setStatus(err.message, "error"));
+  evaluateMissing(missing);
+}
+
+async function refreshHistory() {
+  const { history } = await api("/models/history");
+  q("table.history tbody").replaceChildren(
+    ...(history.length
+      ? history.map((h) =>
+          el(
+            "tr",
+            {},
+            el("td", { text: new Date(h.ts * 1000).toLocaleString() }),
+            el("td", { text: h.action }),
+            el("td", { text: h.checkpoint }),
+            el("td", { text: h.previous || "—" }),
+            el("td", { text: fmt(h.figures?.accuracy) }),
+            el("td", { text: h.by }),
+            el("td", { text: h.override_reason || "" }),
+          ),
+        )
+      : [el("tr", {}, el("td", { colspan: "7", class: "muted", text: "No model promoted yet: the live engine runs the configured one." }))]),
+  );
+  const rb = q("button.rollback");
+  rb.disabled = !history.length || !history[0].previous || !isSupervisor();
+  rb.textContent = history.length && history[0].previous ? `Roll back to ${history[0].previous}` : "Roll back";
+}
+
+async function rollback() {
+  if (!window.confirm(`${q("button.rollback").textContent}? The live engine switches at once.`)) return;
+  try {
+    const res = await api("/models/rollback", { method: "POST" });
+    setStatus(`Rolled back: the live engine runs ${res.promoted} again.`, "ok");
+  } catch (err) {
+    setStatus(err.message, "error");
+  }
+  refreshModels();
+}
+
+// Promotion is a guarded action: the candidate's figures beside the model in use's on
+// the held-out set, a confirmation naming both, and an override reason when it is worse.
+async function askPromote(name) {
+  const dialog = document.getElementById("promote-dialog");
+  const body = dialog.querySelector(".promote-body");
+  body.replaceChildren(el("p", { class: "muted", text: `Evaluating ${name} and the model in use…` }));
+  dialog.showModal();
+  let cmp;
+  try {
+    cmp = await api(`/models/${modelPath(name)}/evaluation`);
+  } catch (err) {
+    body.replaceChildren(el("p", { class: "error", text: err.message }));
+    return;
+  }
+  const row = (label, m) =>
+    el("tr", {}, el("td", { text: label }), el("td", { class: "name", text: m ? m.name : "—" }),
+      el("td", { class: "acc", text: fmt(m?.figures?.accuracy) }),
+      el("td", { text: fmt(m?.figures?.clip_accuracy) }),
+      el("td", { class: "abort", text: fmt(m?.figures?.abort_recall) }));
+  const reason = el("textarea", { class: "override-reason", rows: "2", placeholder: "why promote it anyway" });
+  const confirm = el("button", { type: "button", class: "confirm-promote", text: `Promote ${name}` });
+  const concerns = cmp.concerns || [];
+  body.replaceChildren(
+    el("p", {}, `Promote `, el("b", { text: name }), ` into the live engine, replacing `, el("b", { text: cmp.active ? cmp.active.name : "the configured model" }), "?"),
+    el("table", { class: "compare" },
+      el("thead", {}, el("tr", {}, ...["", "model", "accuracy", "clip accuracy", "wave_off recall"].map((h) => el("th", { text: h })))),
+      el("tbody", {}, row("candidate", cmp.candidate), row("in use", cmp.active))),
+    el("p", { class: "muted", text: `Held-out set: ${cmp.set_description}.` }),
+    ...(concerns.length
+      ? [
+          el("div", { class: "concerns warn" }, el("b", { text: "This model looks worse:" }), el("ul", {}, ...concerns.map((c) => el("li", { text: c })))),
+          el("label", { class: "override" }, "Override reason (required to promote it anyway) ", reason),
+        ]
+      : [el("p", { class: "ok", text: "Not worse than the model in use on this set." })]),
+    el("div", { class: "row" }, confirm, el("button", { type: "button", class: "cancel", text: "Cancel" })),
+    el("p", { class: "promote-result" }),
+  );
+  if (concerns.length) {
+    confirm.disabled = true;
+    confirm.classList.add("danger");
+    confirm.textContent = `Override and promote ${name}`;
+    reason.addEventListener("input", () => (confirm.disabled = !reason.value.trim()));
+  }
+  body.querySelector(".cancel").addEventListener("click", () => dialog.close());
+  confirm.addEventListener("click", async () => {
+    confirm.disabled = true;
+    try {
+      const res = await api(`/models/${modelPath(name)}/promote`, {
+        method: "POST",
+        body: concerns.length ? { override_reason: reason.value.trim() } : {},
+      });
+      dialog.close();
+      setStatus(`Promoted ${name} to the live engine (replacing ${res.previous || "the configured model"}).`, "ok");
+    } catch (err) {
+      body.querySelector(".promote-result").textContent = err.message;
+      body.querySelector(".promote-result").className = "promote-result error";
+      confirm.disabled = false;
+    }
+    refreshModels();
+  });
 }
 
 function setStatus(text, cls = "") {
@@ -172,10 +295,20 @@ async function startRun(ev) {
   ev.preventDefault();
   const f = new FormData(ev.target);
   const body = {};
+  const problems = [];
   for (const [name, spec] of formFields()) {
     if (spec.type === "boolean") body[name] = f.get(name) === "on";
     else if (spec.enum) body[name] = f.get(name);
-    else body[name] = Number(f.get(name));
+    else {
+      const problem = checkNumber(name, spec, f.get(name));
+      ev.target.querySelector(`[name=${name}]`)?.classList.toggle("invalid", Boolean(problem));
+      if (problem) problems.push(problem);
+      body[name] = Number(f.get(name));
+    }
+  }
+  if (problems.length) {
+    setStatus(problems.join(" "), "error");
+    return;
   }
   try {
     const res = await api("/training/runs", { method: "POST", body });
@@ -184,7 +317,7 @@ async function startRun(ev) {
     resetCharts(`Run ${res.id}: starting`);
     refreshRuns();
   } catch (err) {
-    setStatus(`${err.status === 403 ? "Forbidden: " : ""}${err.message}`, "error");
+    setStatus(`${err.status === 403 ? "Forbidden: " : ""}${errorText(err)}`, "error");
   }
 }
 
@@ -211,7 +344,7 @@ export function mount(container) {
   root = container;
   const form = el(
     "form",
-    { class: "card start-run" },
+    { class: "card start-run", novalidate: "" },
     el("h2", { text: "Start a federated run" }),
     el(
       "div",
@@ -222,6 +355,11 @@ export function mount(container) {
     el("p", { class: "train-status" }),
   );
   form.addEventListener("submit", startRun);
+  // A message about the form goes once it is being corrected.
+  form.addEventListener("input", (ev) => {
+    ev.target.classList?.remove("invalid");
+    if (q(".train-status").classList.contains("error")) setStatus("");
+  });
   root.append(
     form,
     el(
@@ -246,9 +384,21 @@ export function mount(container) {
       "section",
       { class: "card" },
       el("h2", { text: "Models" }),
-      el("table", { class: "models" }, el("thead", {}, el("tr", {}, ...["checkpoint", "modified", "size", ""].map((h) => el("th", { text: h })))), el("tbody")),
+      el("p", { class: "muted", text: "Accuracy and wave_off (abort) recall on the held-out synthetic set, which no model here trained on." }),
+      el("table", { class: "models" }, el("thead", {}, el("tr", {}, ...["checkpoint", "modified", "accuracy", "wave_off recall", "size", ""].map((h) => el("th", { text: h })))), el("tbody")),
+    ),
+    el(
+      "section",
+      { class: "card" },
+      el("h2", { text: "Promotion history" }),
+      el("button", { type: "button", class: "rollback small", text: "Roll back" }),
+      el("table", { class: "history" }, el("thead", {}, el("tr", {}, ...["when", "action", "model", "replaced", "accuracy", "by", "override reason"].map((h) => el("th", { text: h })))), el("tbody")),
     ),
   );
+  q("button.rollback").addEventListener("click", rollback);
+  if (!document.getElementById("promote-dialog")) {
+    document.body.append(el("dialog", { id: "promote-dialog" }, el("h2", { text: "Promote a model" }), el("div", { class: "promote-body" })));
+  }
   if (!session.config.training_available) {
     setStatus("No federated runner in this server: runs cannot start.", "warn");
   }
@@ -269,6 +419,7 @@ export function mount(container) {
       refreshRuns();
       if (msg.status === "completed") refreshModels();
     }),
+    on("model", () => refreshModels().catch((err) => setStatus(err.message, "error"))),
   );
   refreshRuns().catch((err) => setStatus(err.message, "error"));
   refreshModels().catch((err) => setStatus(err.message, "error"));

@@ -12,7 +12,7 @@ from proxima.api.auth import VIEW_PATH
 from proxima.api.deps import ConsoleDep, CurrentUser
 from proxima.api.interfaces import TrainingRunner
 from proxima.api.openapi import openapi_schema
-from proxima.api.schemas import TRAINING_FORM
+from proxima.api.schemas import TRAINING_FORM, RecordingRequest
 from proxima.federated.config import FLConfig
 from proxima.types import GESTURES
 
@@ -36,6 +36,15 @@ def _training_form(runner: TrainingRunner | None) -> dict[str, dict[str, Any]]:
     return form
 
 
+def _recording_form() -> dict[str, dict[str, Any]]:
+    """The Labelling page's numeric fields with the bounds `RecordingRequest` checks (one
+    definition: the request schema's own JSON schema)."""
+    props = RecordingRequest.model_json_schema()["properties"]
+    keep = ("type", "minimum", "maximum", "default")
+    return {name: {k: props[name][k] for k in keep if k in props[name]}
+            for name in ("frames", "countdown_s")}  # fmt: skip
+
+
 @router.get("/config")
 def get_config(user: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
     s = console.settings
@@ -51,6 +60,7 @@ def get_config(user: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
         "drones": [d.name for d in s.drones],
         "training_available": console.training is not None,
         "training_form": _training_form(console.training),
+        "recording_form": _recording_form(),
         "estop_available": console.estop is not None,
     }
 

@@ -128,3 +128,23 @@ def confirm_emergency_stop(
         log_id=result.get("log_id"),
     )
     return {"drone": name, "confirmed": True, **result}
+
+
+@router.post("/{name}/resume", responses=errors(404, 409, 503))
+def resume_drone(
+    name: str, user: SupervisorUser, console: ConsoleDep, audit: AuditDep
+) -> dict[str, Any]:
+    """Clear a confirmed emergency stop: gesture control may be armed again by the next
+    have_command (nothing is sent to the vehicle); 409 when the drone is not stopped."""
+    _known(console, name)
+    estop = _estop(console)
+    try:
+        result = estop.resume(name, user.username)
+    except ValueError as exc:
+        audit(AuditAction.DRONE_RESUME, actor=user.username, target=name,
+              outcome=AuditOutcome.REFUSED, reason=str(exc))  # fmt: skip
+        raise HTTPException(status.HTTP_409_CONFLICT, str(exc)) from None
+    except KeyError as exc:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no drone {exc}") from None
+    audit(AuditAction.DRONE_RESUME, actor=user.username, target=name, log_id=result.get("log_id"))
+    return {"drone": name, **result}

@@ -35,6 +35,7 @@ def stream_list(console: Console) -> list[StreamOut]:
                 priority=s.priority,
                 configured=True,
                 driving=driving == s.name,
+                handover_reason=console.live.handover_reason,
                 live=live.pop(s.name, StreamLive()),
             )
         )
@@ -48,6 +49,7 @@ def stream_list(console: Console) -> list[StreamOut]:
                 priority=len(out),
                 configured=False,
                 driving=driving == name,
+                handover_reason=console.live.handover_reason,
                 live=state,
             )
         )

@@ -10,7 +10,7 @@ from fastapi import APIRouter, WebSocket, status
 from proxima.api.auth import WS_SUBPROTOCOL, token_from
 from proxima.api.routers.drones import drone_list
 from proxima.api.routers.streams import stream_list
-from proxima.api.schemas import Hello, UserOut
+from proxima.api.schemas import CommandLogRow, Hello, UserOut
 from proxima.store.users import user_for_token
 
 router = APIRouter(tags=["ws"])
@@ -41,6 +41,10 @@ async def websocket_endpoint(websocket: WebSocket) -> None:
             streams=stream_list(console),
             drones=drone_list(console),
             commands=console.live.commands()[:50],
+            alarms=console.alarms.recent() if console.alarms else [],
+            command_log=[
+                CommandLogRow.model_validate(r) for r in console.command_log.recent(limit=200)
+            ],
         ).model_dump(mode="json")
 
     console.hub.start()

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from proxima.drone.controller.execute import CommandExecutor
 from proxima.drone.controller.record import CommandContext, CommandRecorder, ControlOutcome
+from proxima.drone.events import DroneAlarmEvent
 from proxima.drone.link import DroneLink
 from proxima.drone.safety import EmergencyStopRequest, SafetyGate
 from proxima.events import CommandEvent
@@ -68,8 +69,10 @@ class EmergencyStops:
         """
         req = self.safety.confirm_emergency_stop(token, drone)
         drone = req.drone
+        self.safety.mark_stopped(drone)
         self.executor.set_control(drone, False)
         link = self.links[drone]
+        link.emergency_stopped = True
         self.recorder.alarm(drone, "emergency_stop", f"emergency stop ({req.kind}) confirmed")
         event = CommandEvent(t=time.time(), stream="", command=COMMAND, drone=drone)
         ctx = CommandContext(drone, "api", COMMAND)
@@ -77,6 +80,36 @@ class EmergencyStops:
         result = link.land() if req.kind == "land" else link.disarm(force=True)
         track = "land" if req.kind == "land" else None
         return self.executor.sent(event, ctx, req.kind, result, link, track=track)
+
+    def resume(self, drone: str) -> ControlOutcome:
+        """A supervisor clears the stop: gesture control may be armed again (by the next
+        have_command); nothing is sent to the vehicle (take off with its own controls).
+
+        Raises:
+            KeyError: unknown drone.  ValueError: the drone is not stopped.
+        """
+        link = self.links[drone]
+        if not self.safety.clear_stop(drone):
+            raise ValueError(f"{drone} is not emergency-stopped")
+        link.emergency_stopped = False
+        self.recorder.publish(
+            DroneAlarmEvent(
+                t=time.time(), stream=drone, drone=drone, kind="emergency_stop",
+                message=f"{drone}: resumed by a supervisor", active=False,
+            )
+        )  # fmt: skip
+        event = CommandEvent(t=time.time(), stream="", command="resume", drone=drone)
+        return self.recorder.finish(
+            event,
+            CommandContext(drone, "api", "resume"),
+            "resume",
+            "done",
+            "resumed: have_command arms gesture control again",
+            outcome="resumed",
+        )
+
+    def stopped(self) -> list[str]:
+        return sorted(d for d in self.links if self.safety.is_stopped(d))
 
 
 class EmergencyStopService:
@@ -109,3 +142,12 @@ class EmergencyStopService:
             "log_id": out.log_id,
             "confirmed_by": user,
         }
+
+    def resume(self, drone: str, user: str) -> dict[str, Any]:
+        """Raises: KeyError: unknown drone.  ValueError: not stopped."""
+        out = self.controller.estops.resume(drone)
+        return {"ok": True, "detail": out.reason, "log_id": out.log_id, "resumed_by": user}
+
+    def stopped(self) -> list[str]:
+        """The drones emergency-stopped and not resumed yet."""
+        return self.controller.estops.stopped()

@@ -54,7 +54,7 @@ class CommandExecutor:
     def set_control(self, drone: str, armed: bool) -> None:
         """Arm or disarm gesture control of `drone` (never its motors)."""
         if armed:
-            self.safety.arm_control(drone)
+            armed = self.safety.arm_control(drone)  # refused for a stopped drone
         else:
             self.safety.disarm_control(drone)
         link = self.links.get(drone)
@@ -80,6 +80,9 @@ class CommandExecutor:
         self, event: CommandEvent, ctx: CommandContext, mapped: MappedAction, link: DroneLink
     ) -> ControlOutcome:
         drone, action, finish = event.drone, mapped.action, self.recorder.finish
+        if action == "arm_control" and self.safety.is_stopped(drone):
+            reason = "emergency-stopped: a supervisor must resume it before have_command"
+            return finish(event, ctx, action, "refused", reason)
         if action == "arm_control":
             self.set_control(drone, True)
             return finish(

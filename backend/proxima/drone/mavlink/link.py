@@ -179,6 +179,7 @@ class MavlinkLink(MavlinkActions):
                     drone=self.name,
                     link=link,
                     gesture_control=self.gesture_control,
+                    stopped=self.emergency_stopped,
                 )
             )
             return
@@ -189,6 +190,7 @@ class MavlinkLink(MavlinkActions):
                 drone=self.name,
                 link=link,
                 gesture_control=self.gesture_control,
+                stopped=self.emergency_stopped,
                 autopilot=tel.autopilot,
                 mode=tel.mode,
                 armed=tel.armed,
@@ -200,6 +202,7 @@ class MavlinkLink(MavlinkActions):
                 battery_voltage=tel.battery_voltage,
                 global_position=list(tel.global_position) if tel.global_position else None,
                 position_target=_rounded(tel.position_target),
+                heard_age_s=round(max(time.monotonic() - tel.received, 0.0), 3),
             )
         )
 
