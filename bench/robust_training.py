@@ -58,7 +58,8 @@ def windows_cmd(args: argparse.Namespace) -> dict:
     out: dict = {}
     for spec in args.model:
         name, _, rest = spec.partition("=")
-        path, _, split = rest.rpartition(":")
+        path, _, split = rest.partition(".pt:")  # splits have colons of their own
+        path += ".pt"
         clf = GestureClassifier.load(path)
         test = split_clips(data.clips, split, WINDOW).test
         row = {"checkpoint": path, "split": split, "temperature": clf.temperature}
@@ -114,7 +115,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     w = sub.add_parser("windows")
-    w.add_argument("--model", action="append", required=True, help="NAME=CKPT:SPLIT")
+    w.add_argument("--model", action="append", required=True, help="NAME=CKPT.pt:SPLIT")
     w.add_argument("--seed", type=int, default=0)
     w.add_argument("--out", type=Path, required=True)
     s = sub.add_parser("streams")
