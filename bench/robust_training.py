@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import pickle
 import shlex
 import sys
 import time
@@ -76,16 +77,26 @@ def streams_cmd(args: argparse.Namespace) -> dict:
     settings = EngineSettings()
     conds = {"clean": condition("clean"), "field1": condition("field", 1)}
     tune_sets, eval_sets = {}, {}
+    cache = args.cache
+    if cache is not None and cache.is_file():  # the same checkpoint and stream options
+        tune_sets, eval_sets = pickle.loads(cache.read_bytes())
+        log(f"recognitions from {cache}")
     for key, model in conds.items():
+        if key in eval_sets:
+            continue
         t0 = time.perf_counter()
         s = decision_streams(clips, range(args.tune_streams), args.segments, model)
         tune_sets[key] = (s, recognitions(s, clf, settings))
         s = decision_streams(clips, range(1000, 1000 + args.streams), args.segments, model)
         eval_sets[key] = (s, recognitions(s, clf, settings))
         log(f"{key}: streams recognised in {time.perf_counter() - t0:.0f} s")
+    if cache is not None and not cache.is_file():
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        cache.write_bytes(pickle.dumps((tune_sets, eval_sets)))
     best, rows = tune_evidence(list(tune_sets.values()))
     log(f"evidence rule selected: {best}")
-    params = {k: best[k] for k in ("evidence_threshold", "evidence_half_life_s", "confirm")}
+    keys = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
+    params = {k: best[k] for k in keys}
     rules = {
         "average": ControlSettings(),
         "evidence": ControlSettings(decision="evidence", **params),
@@ -124,6 +135,7 @@ def main() -> None:
     s.add_argument("--tune-streams", type=int, default=6)
     s.add_argument("--segments", type=int, default=40)
     s.add_argument("--out", type=Path, required=True)
+    s.add_argument("--cache", type=Path, help="pickle of the recognitions (made if absent)")
     args = ap.parse_args()
     torch.set_num_threads(1)
     t0 = time.perf_counter()

@@ -108,8 +108,9 @@ def recognitions(
 
 
 EVIDENCE_GRID: dict[str, list[Any]] = {
-    "evidence_threshold": [2.0, 3.0, 4.0, 6.0, 8.0, 12.0],
+    "evidence_threshold": [4.0, 6.0, 8.0, 12.0, 16.0, 24.0],
     "evidence_half_life_s": [0.5, 1.0, 2.0],
+    "evidence_clip": [1.0, 1.5, 2.0, 3.0],
     "confirm": [1, 2],
 }
 
