@@ -2,11 +2,11 @@
 priority arbiter across the streams that watch the operator.
 
 Public API: `ControlSettings`, `MovingAverageFilter`, `HandEvidence`, `CommandGate`,
-`Arming`, `PriorityArbiter`, `Sight`, `CommandController`, `StreamUpdate`,
-`WindowEvidence`. Everything runs
-on stream time.
+`Arming`, `PriorityArbiter`, `EvidenceAccumulator` (`decision_filter`), `Sight`,
+`CommandController`, `StreamUpdate`, `WindowEvidence`. Everything runs on stream time.
 """
 
+from proxima.control.accumulate import DecisionFilter, EvidenceAccumulator, decision_filter
 from proxima.control.arbiter import Handover, PriorityArbiter, Sight
 from proxima.control.arming import ABORT_GESTURE, ARM_GESTURE, Arming
 from proxima.control.config import ControlSettings
@@ -28,6 +28,8 @@ __all__ = [
     "CommandController",
     "CommandGate",
     "ControlSettings",
+    "DecisionFilter",
+    "EvidenceAccumulator",
     "FilteredAction",
     "HandEvidence",
     "Handover",
@@ -36,4 +38,5 @@ __all__ = [
     "Sight",
     "StreamUpdate",
     "WindowEvidence",
+    "decision_filter",
 ]

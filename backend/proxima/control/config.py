@@ -29,6 +29,11 @@ ConfirmByCommand = Annotated[
 ThresholdByCommand = Annotated[
     dict[str, Annotated[float, Field(gt=0.0, le=1.0)]], AfterValidator(_known_gestures)
 ]
+# Per-gesture evidence (nats) an action needs under the evidence rule.
+ThresholdByEvidence = Annotated[
+    dict[str, Annotated[float, Field(gt=0.0)]], AfterValidator(_known_gestures)
+]
+DecisionRule = Literal["average", "evidence"]
 # The operator's hand that all_clear / not_clear need in view; "off": no check.
 ThumbHand = Literal["right", "left", "off"]
 
@@ -46,6 +51,12 @@ class ControlSettings(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
+    decision: DecisionRule = Field(
+        "average",
+        description="how recognitions become an action: 'average' (the moving average and "
+        "its threshold) or 'evidence' (a leaky sum of calibrated log-odds, "
+        "control/accumulate.py)",
+    )
     filter_size: int = Field(3, ge=1, description="recognitions in the moving average")
     threshold: float = Field(
         0.9, ge=0.0, le=1.0, description="averaged probability an action needs"
@@ -54,6 +65,18 @@ class ControlSettings(BaseModel):
         default_factory=lambda: {"wave_off": 0.7},
         description="per-command `threshold`, e.g. {'wave_off': 0.7}: the abort (hover and "
         "disarm) is safe to give on less evidence, and missing it is not",
+    )
+    evidence_threshold: float = Field(
+        4.0, gt=0.0, description="evidence rule: summed log-odds (nats) an action needs"
+    )
+    evidence_threshold_by_command: ThresholdByEvidence = Field(
+        default_factory=dict, description="evidence rule: per-command `evidence_threshold`"
+    )
+    evidence_half_life_s: float = Field(
+        1.0, gt=0.0, description="evidence rule: stream seconds in which evidence halves"
+    )
+    evidence_clip: float = Field(
+        3.0, gt=0.0, description="evidence rule: most log-odds one recognition adds or takes"
     )
     confirm: int = Field(
         2, ge=1, description="consecutive filtered decisions that must agree before a command"

@@ -85,14 +85,10 @@ def recognize(
     try:
         given = {k: v for k, v in overrides.items() if v is not None}
         control = ControlSettings.model_validate(given)
-        settings = EngineSettings.model_validate(
-            {
-                "checkpoint": checkpoint,
-                "pose_every": pose_every,
-                "pose_model": pose_model,
-                **({"stride": stride} if stride is not None else {}),
-            }
-        )
+        fields = {"checkpoint": checkpoint, "pose_every": pose_every, "pose_model": pose_model}
+        if stride is not None:
+            fields["stride"] = stride
+        settings = EngineSettings.model_validate(fields)
         spec = StreamSpec(name=name, uri=source, drone=drone)
     except ValueError as exc:
         console.print(f"[red]error:[/red] {exc}")

@@ -76,6 +76,12 @@ class EngineSettings(BaseModel):
         description="a pause between poses longer than this restarts the window "
         "(training windows never bridge more than 5 missing frames at 30 fps)",
     )
+    smooth_replays: bool = Field(
+        True,
+        description="replayed landmark streams pass the One Euro filter the camera path's "
+        "tracker applies (`proxima.pose.LIVE_ONE_EURO`), the one training windows pass: "
+        "one smoothing rule for live, replay and training",
+    )
     pose_every: int = Field(1, ge=1, description="publish a PoseEvent every N frames")
     num_poses: int = Field(2, ge=1, description="people the pose estimator looks for")
     pose_model: Path | None = Field(None, description="MediaPipe pose model (default: resolved)")

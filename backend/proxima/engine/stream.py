@@ -2,7 +2,8 @@
 moving-average filter -> hand evidence, publishing pose, gesture and action events on the way.
 
 Replayed frames carry their pose, so pose estimation and operator tracking are skipped
-for them (the replayed landmarks are used exactly as recorded); camera frames go through
+for them; their landmarks pass the same One Euro filter as the tracker's
+(`EngineSettings.smooth_replays`, `proxima.pose.PoseSmoother`); camera frames go through
 MediaPipe and the operator tracker, created on the first image so a replay never loads
 MediaPipe; a simulated camera's frames list the people it sees (`Frame.poses`) and go
 through the operator tracker only. The result of every frame is a `StreamUpdate` for the
@@ -36,16 +37,16 @@ import numpy as np
 from proxima.control import (
     ControlSettings,
     HandEvidence,
-    MovingAverageFilter,
     Sight,
     StreamUpdate,
+    decision_filter,
 )
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.fusion import temperature, window_evidence
 from proxima.engine.taps import StreamTaps
 from proxima.engine.window import PoseWindow
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
-from proxima.pose import operator_sight
+from proxima.pose import PoseSmoother, operator_sight
 from proxima.types import Event, Frame, Pose
 
 log = logging.getLogger(__name__)
@@ -136,7 +137,7 @@ class StreamPipeline:
         self.taps = taps if taps is not None else StreamTaps(spec.name)
         self._classifier = classifier
         self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
-        self.filter = MovingAverageFilter.from_settings(self.control, classifier.labels)
+        self.filter = decision_filter(self.control, classifier.labels)
         self.evidence = HandEvidence.from_settings(self.control)
         self._temperature = temperature(classifier, classifier.labels)
         self._restarted = True  # the filter was emptied since the last window (fusion)
@@ -144,6 +145,9 @@ class StreamPipeline:
         self.classifications = 0
         self.last_pose: Pose | None = None  # the operator's pose in the latest frame (taps)
         self._pose_stage: PoseStage | None = None
+        self._smoother: PoseSmoother | None = (
+            PoseSmoother() if self.settings.smooth_replays else None
+        )
         self._track_id = 0
         self._lock_request: bool | None = None  # set by the decision path, any thread
         self._lock_guard = threading.Lock()
@@ -181,7 +185,7 @@ class StreamPipeline:
         clf = swap.classifier
         if clf.window != self.window.size:
             self.window = PoseWindow(clf.window, self.settings.stride, self.settings.max_gap_s)
-        self.filter = MovingAverageFilter.from_settings(self.control, clf.labels)
+        self.filter = decision_filter(self.control, clf.labels)
         self._classifier = clf
         self._temperature = temperature(clf, clf.labels)
         self._restarted = True
@@ -207,7 +211,11 @@ class StreamPipeline:
 
     def _operator_pose(self, frame: Frame) -> Pose | None:
         if frame.pose is not None:
-            return frame.pose
+            if self._smoother is None:
+                return frame.pose
+            p = frame.pose
+            xyz = self._smoother(p.xyz, frame.t)
+            return Pose(t=p.t, xyz=xyz, visibility=p.visibility, image_size=p.image_size)
         if frame.image is None and frame.poses is None:
             return None
         if self._pose_stage is None:

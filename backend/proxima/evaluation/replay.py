@@ -29,9 +29,9 @@ from proxima.control import (
     CommandController,
     ControlSettings,
     HandEvidence,
-    MovingAverageFilter,
     Sight,
     StreamUpdate,
+    decision_filter,
 )
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.stream import DATASET_ASPECT, Classifier, StreamPipeline
@@ -262,7 +262,7 @@ def decide(rec: Recognitions, control: ControlSettings) -> Run:
             f"the recognitions judged the hand with {rec.hand}, these settings with {hand}: "
             "recognize the stream again with them"
         )
-    filt = MovingAverageFilter.from_settings(control, rec.labels)
+    filt = decision_filter(control, rec.labels)
     evidence = HandEvidence.from_settings(control)
     controller = CommandController([rec.stream], rec.stream, control)
     run = Run()

@@ -76,6 +76,9 @@ class FLConfig:
     max_gap: Annotated[int, Field(ge=0)] = 5
     patience: AtLeastOne = 12  # local early stopping (epochs without a better val loss)
     mirror: bool = False  # mirroring on the drones; no gain measured (docs/federated.md)
+    # local epochs on capture-noised, One-Euro-smoothed windows (gesture/robust.py; the
+    # partitions carry no history, so without the frame-rate and loss effects), or "none"
+    augment: Literal["none", "capture"] = "capture"
     seed: int = 0
     threads: AtLeastOne = 1  # torch threads per client
     round_timeout_s: Positive = 600.0  # a drone that has not answered by then is dropped

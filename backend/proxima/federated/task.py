@@ -105,6 +105,7 @@ def train_local(
         max_gap=cfg.max_gap,
         threads=cfg.threads,
         mirror=cfg.mirror,
+        augment=cfg.augment,
     )
     mu = cfg.proximal_mu if cfg.strategy == "fedprox" else 0.0
     history = fit(

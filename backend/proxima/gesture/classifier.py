@@ -2,12 +2,15 @@
 
 The checkpoint (torch.save of plain types, loadable with weights_only=True) holds the
 weights, the model's name and config, the label list, the window length, the feature
-pipeline's name and fitted state, and free-form metadata (command, data hash, metrics).
+pipeline's name and fitted state, the softmax temperature fitted on held-out windows
+(gesture/calibration.py; absent in older checkpoints: 1), and free-form metadata
+(command, data hash, metrics).
 """
 
 from __future__ import annotations
 
 import datetime as dt
+import math
 from pathlib import Path
 from typing import Any
 
@@ -39,8 +42,15 @@ def save_checkpoint(
     pipeline: Pipeline,
     window: int,
     metadata: dict[str, Any],
+    temperature: float = 1.0,
 ) -> Path:
-    """Write a self-contained checkpoint (atomically: a temp file, then a rename)."""
+    """Write a self-contained checkpoint (atomically: a temp file, then a rename).
+
+    Raises:
+        ValueError: a temperature that is not a positive finite number.
+    """
+    if not (math.isfinite(temperature) and temperature > 0):
+        raise ValueError(f"temperature must be a positive number, got {temperature!r}")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     blob = {
@@ -51,6 +61,7 @@ def save_checkpoint(
                        for k, v in model.state_dict().items()},
         "labels": list(GESTURES),
         "window": window,
+        "temperature": float(temperature),
         "pipeline": {"name": pipeline.name, "state": pipeline.state()},
         "metadata": {"created": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"), **metadata},
     }  # fmt: skip
@@ -64,8 +75,10 @@ class GestureClassifier:
     """Classifies 60-frame windows of MediaPipe landmarks into the 13 gestures."""
 
     def __init__(self, model: nn.Module, model_name: str, pipeline: Pipeline, window: int,
-                 labels: tuple[str, ...], metadata: dict[str, Any]) -> None:  # fmt: skip
+                 labels: tuple[str, ...], metadata: dict[str, Any],
+                 temperature: float = 1.0) -> None:  # fmt: skip
         self.model = model.eval()
+        self.temperature = temperature  # softmax(logits / T): calibrated probabilities
         self.model_name = model_name
         self.pipeline = pipeline
         self.window = window
@@ -100,8 +113,11 @@ class GestureClassifier:
         sd = blob["state_dict"]
         state = {k: v.float() if v.is_floating_point() else v for k, v in sd.items()}
         model.load_state_dict(state)
+        temperature = float(blob.get("temperature", 1.0))  # older checkpoints: uncalibrated
+        if not (math.isfinite(temperature) and temperature > 0):
+            raise ValueError(f"{path}: temperature {temperature!r} is not a positive number")
         return cls(model, blob["model"], pipeline, int(blob["window"]), tuple(blob["labels"]),
-                   blob.get("metadata", {}))  # fmt: skip
+                   blob.get("metadata", {}), temperature)  # fmt: skip
 
     def features(self, xyz: np.ndarray, aspect: float | np.ndarray = 16 / 9,
                  has_z: bool = True) -> np.ndarray:  # fmt: skip
@@ -115,4 +131,4 @@ class GestureClassifier:
         xyz = np.asarray(xyz, np.float32)
         if xyz.ndim != 4 or xyz.shape[1:] != (self.window, 33, 3):
             raise ValueError(f"expected windows (N, {self.window}, 33, 3), got {xyz.shape}")
-        return predict_proba(self.model, self.features(xyz, aspect))
+        return predict_proba(self.model, self.features(xyz, aspect), temperature=self.temperature)

@@ -54,6 +54,13 @@ def train(
     transitions: Annotated[
         float, typer.Option(help="Share of windows turned into gesture onsets (e.g. 0.3).")
     ] = 0.0,
+    augment: Annotated[
+        str,
+        typer.Option(
+            help="capture: each epoch's windows redrawn through the capture model (clean, "
+            "field 1, field 2) and the live One Euro filter; none: the recordings as they are."
+        ),
+    ] = "capture",
     refit: Annotated[
         bool,
         typer.Option(
@@ -71,7 +78,7 @@ def train(
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
                       seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
-                      transitions=transitions, refit=refit)  # fmt: skip
+                      transitions=transitions, refit=refit, augment=augment)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     command = "proxima " + shlex.join(sys.argv[1:])

@@ -5,6 +5,9 @@ Early stopping keeps the best weights by validation loss; ReduceLROnPlateau lowe
 learning rate when validation stalls; gradients are clipped at 1.0 (the paper's LSTM
 collapses to a constant prediction without it); everything is seeded. `fit_schedule`
 replays a run's learning rates on more data without validation (the refit, workflow.py).
+With `augment = "capture"` (the default) every epoch's windows are redrawn through the
+capture model and the live One Euro filter (gesture/robust.py), and validation windows
+once, with a fixed seed, the same way.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from torch import nn
 from proxima.gesture.augment import mirror, rotate, time_warp, transitions
 from proxima.gesture.features import Pipeline
 from proxima.gesture.geometry import to_metric
+from proxima.gesture.robust import AUGMENTS, CAPTURE_MIX, CaptureSource, capture_windows
 from proxima.gesture.windows import Windows
 
 MIN_DELTA = 1e-4  # the least fall in validation loss that counts as better
@@ -54,6 +58,10 @@ class TrainConfig:
     # live model confidently wrong, mostly on the left view's not_clear (docs/gesture.md).
     refit: bool = False
     threads: int = 2
+    # "capture": windows redrawn each epoch through the capture model and the live One
+    # Euro filter (gesture/robust.py); "none": the recordings as they are, unfiltered.
+    augment: str = "capture"
+    capture_mix: list = field(default_factory=lambda: [list(m) for m in CAPTURE_MIX])
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -72,11 +80,40 @@ def features(pipeline: Pipeline, w: Windows) -> np.ndarray:
     return pipeline.transform(to_metric(w.xyz, w.aspect), w.has_z)
 
 
+def check_augment(cfg: TrainConfig) -> None:
+    """Raises ValueError for an unknown `cfg.augment`."""
+    if cfg.augment not in AUGMENTS:
+        raise ValueError(f"augment {cfg.augment!r}: choose from {', '.join(AUGMENTS)}")
+
+
+def validation_features(
+    pipeline: Pipeline, w: Windows, cfg: TrainConfig, source: CaptureSource | None = None
+) -> np.ndarray:
+    """Model input for validation (early stopping, the temperature): with capture
+    augmentation the windows drawn once through it (seed `cfg.seed + 1`), else as they are."""
+    if cfg.augment != "capture":
+        return features(pipeline, w)
+    src = source if source is not None else CaptureSource.from_windows(w)
+    xyz = capture_windows(w, src, cfg.capture_mix, np.random.default_rng(cfg.seed + 1),
+                          w.xyz.shape[1])  # fmt: skip
+    return pipeline.transform(to_metric(xyz, w.aspect), w.has_z)
+
+
 def augmented(
-    pipeline: Pipeline, metric: np.ndarray, w: Windows, cfg: TrainConfig, rng: np.random.Generator
+    pipeline: Pipeline,
+    metric: np.ndarray | None,
+    w: Windows,
+    cfg: TrainConfig,
+    rng: np.random.Generator,
+    source: CaptureSource | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """One epoch's augmented features and labels from precomputed metric windows."""
+    """One epoch's augmented features and labels: from precomputed metric windows, or
+    (`metric` None, capture augmentation) from windows redrawn through the capture model
+    and the live filter, then the geometric augmentations."""
     labels = w.labels
+    if metric is None:
+        src = source if source is not None else CaptureSource.from_windows(w)
+        metric = to_metric(capture_windows(w, src, cfg.capture_mix, rng, w.xyz.shape[1]), w.aspect)
     if cfg.transitions:
         metric = transitions(metric, labels, w.scene, rng, cfg.transitions)
     if cfg.time_warp:
@@ -93,14 +130,26 @@ def augmented(
 
 
 @torch.no_grad()
-def predict_proba(model: nn.Module, x: np.ndarray, batch: int = 512) -> np.ndarray:
-    """Softmax probabilities (N, 13) for feature windows (N, W, F)."""
+def predict_logits(model: nn.Module, x: np.ndarray, batch: int = 512) -> np.ndarray:
+    """The model's logits (N, 13) for feature windows (N, W, F)."""
     model.eval()
-    out = [
-        torch.softmax(model(torch.from_numpy(x[i : i + batch])), dim=1).numpy()
-        for i in range(0, len(x), batch)
-    ]
+    out = [model(torch.from_numpy(x[i : i + batch])).numpy() for i in range(0, len(x), batch)]
     return np.concatenate(out) if out else np.zeros((0, 13), np.float32)
+
+
+def softmax(logits: np.ndarray, temperature: float = 1.0) -> np.ndarray:
+    """Softmax of logits / temperature along the last axis."""
+    z = np.asarray(logits, np.float64) / temperature
+    z = np.exp(z - z.max(axis=-1, keepdims=True))
+    return (z / z.sum(axis=-1, keepdims=True)).astype(np.float32)
+
+
+def predict_proba(
+    model: nn.Module, x: np.ndarray, batch: int = 512, temperature: float = 1.0
+) -> np.ndarray:
+    """Softmax probabilities (N, 13) for feature windows (N, W, F), of the logits divided
+    by `temperature` (1: the model's own; a fitted one calibrates them, calibration.py)."""
+    return softmax(predict_logits(model, x, batch), temperature)
 
 
 def evaluate_loss(model: nn.Module, x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
@@ -127,14 +176,15 @@ def _train_epoch(
     opt: torch.optim.Optimizer,
     loss_fn: nn.Module,
     pipeline: Pipeline,
-    metric: np.ndarray,
+    metric: np.ndarray | None,
     train: Windows,
     cfg: TrainConfig,
     rng: np.random.Generator,
     penalty: Callable[[nn.Module], torch.Tensor] | None = None,
+    source: CaptureSource | None = None,
 ) -> float:
     """One epoch over freshly augmented windows; returns the mean training loss."""
-    x, y = augmented(pipeline, metric, train, cfg, rng)
+    x, y = augmented(pipeline, metric, train, cfg, rng, source)
     order = rng.permutation(len(x))
     model.train()
     total = 0.0
@@ -152,12 +202,14 @@ def _train_epoch(
 
 def _start(
     model: nn.Module, train: Windows, cfg: TrainConfig
-) -> tuple[np.random.Generator, np.ndarray, torch.optim.Optimizer, nn.Module]:
-    """What every run sets up first: (the seeded rng, the metric windows, the optimiser,
-    the loss), with torch's threads and seeds set."""
+) -> tuple[np.random.Generator, np.ndarray | None, torch.optim.Optimizer, nn.Module]:
+    """What every run sets up first: (the seeded rng, the metric windows (None with
+    capture augmentation: redrawn each epoch), the optimiser, the loss), with torch's
+    threads and seeds set."""
+    check_augment(cfg)
     torch.set_num_threads(cfg.threads)
     rng = seed_everything(cfg.seed)
-    metric = to_metric(train.xyz, train.aspect)
+    metric = None if cfg.augment == "capture" else to_metric(train.xyz, train.aspect)
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     return rng, metric, opt, nn.CrossEntropyLoss(label_smoothing=cfg.label_smoothing)
 
@@ -170,15 +222,22 @@ def fit(
     cfg: TrainConfig,
     on_epoch: Callable[[EpochLog], None] | None = None,
     penalty: Callable[[nn.Module], torch.Tensor] | None = None,
+    source: CaptureSource | None = None,
+    val_source: CaptureSource | None = None,
 ) -> list[EpochLog]:
     """Train `model` in place; with `val`, stop early and restore the best weights.
 
     The pipeline must already be fitted. `penalty(model)`, if given, is added to every
-    batch's loss (federated clients use it for FedProx's proximal term). Returns one log
-    entry per epoch.
+    batch's loss (federated clients use it for FedProx's proximal term). `source` and
+    `val_source` hold the rows before each window for capture augmentation (robust.py;
+    without them the frame-rate and loss effects are off). Returns one log entry per epoch.
     """
     rng, metric, opt, loss_fn = _start(model, train, cfg)
-    xv = features(pipeline, val) if val is not None and len(val) else None
+    xv = (
+        validation_features(pipeline, val, cfg, val_source)
+        if val is not None and len(val)
+        else None
+    )
     sched = torch.optim.lr_scheduler.ReduceLROnPlateau(
         opt, factor=cfg.lr_factor, patience=cfg.lr_patience
     )
@@ -187,7 +246,9 @@ def fit(
     since_best = 0
     for epoch in range(1, cfg.epochs + 1):
         t0 = time.perf_counter()
-        train_loss = _train_epoch(model, opt, loss_fn, pipeline, metric, train, cfg, rng, penalty)
+        train_loss = _train_epoch(
+            model, opt, loss_fn, pipeline, metric, train, cfg, rng, penalty, source
+        )
         if xv is not None:
             val_loss, val_acc = evaluate_loss(model, xv, val.labels)  # type: ignore[union-attr]
         else:
@@ -233,6 +294,7 @@ def fit_schedule(
     cfg: TrainConfig,
     lrs: list[float],
     on_epoch: Callable[[EpochLog], None] | None = None,
+    source: CaptureSource | None = None,
 ) -> list[EpochLog]:
     """Train `model` in place for one epoch per entry of `lrs`, at that learning rate,
     with the same augmentation and clipping as `fit` and no validation (the log's
@@ -243,7 +305,7 @@ def fit_schedule(
         t0 = time.perf_counter()
         for group in opt.param_groups:
             group["lr"] = lr
-        loss = _train_epoch(model, opt, loss_fn, pipeline, metric, train, cfg, rng)
+        loss = _train_epoch(model, opt, loss_fn, pipeline, metric, train, cfg, rng, None, source)
         log = EpochLog(epoch, loss, float("nan"), float("nan"), lr, time.perf_counter() - t0)
         history.append(log)
         if on_epoch:

@@ -10,18 +10,23 @@ from pathlib import Path
 
 import torch
 
+from proxima.gesture.calibration import fit_temperature
 from proxima.gesture.classifier import save_checkpoint
 from proxima.gesture.clip import Clip
 from proxima.gesture.datasets import load_data
 from proxima.gesture.features import make_pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
+from proxima.gesture.robust import CaptureSource, history_rows
 from proxima.gesture.train import (
     EpochLog,
     TrainConfig,
+    check_augment,
     chosen_schedule,
     fit,
     fit_schedule,
+    predict_logits,
+    validation_features,
 )
 from proxima.gesture.windows import WINDOW, Windows, make_windows, split_clips, validation_parts
 
@@ -68,16 +73,28 @@ def train_model(
     rates the first run used, and is the one saved. `on_refit(windows, epochs)` is
     called when the refit starts; `on_epoch` is called for both runs' epochs."""
     t0 = time.perf_counter()
+    check_augment(cfg)
     data = load_data(data_specs)
     train = split_clips(data.clips, split, WINDOW, data.uav_dir).train
     fit_w, val_w = fit_and_validation_windows(train, cfg.stride, cfg.max_gap)
+    fit_parts, val_parts = validation_parts(train, WINDOW)
+    sources: dict[str, CaptureSource | None] = {"fit": None, "val": None, "whole": None}
+    if cfg.augment == "capture":  # the rows before each window (robust.py)
+        rows = history_rows(cfg.capture_mix)
+        for key, parts in (("fit", fit_parts), ("val", val_parts), ("whole", train)):
+            if key != "whole" or cfg.refit:
+                sources[key] = CaptureSource.from_parts(
+                    parts, WINDOW, cfg.stride, cfg.max_gap, rows
+                )
     if on_start:
         on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
     pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
     pipeline.fit(to_metric(fit_w.xyz, fit_w.aspect))
     torch.manual_seed(cfg.seed)  # the initial weights too: one seed, one model
     model = build_model(model_name, num_features=pipeline.num_features)
-    history = fit(model, pipeline, fit_w, val_w, cfg, on_epoch)
+    history = fit(
+        model, pipeline, fit_w, val_w, cfg, on_epoch, None, sources["fit"], sources["val"]
+    )
     refit_history: list[EpochLog] = []
     refit_windows = 0
     if cfg.refit and len(val_w):
@@ -88,8 +105,14 @@ def train_model(
             on_refit(len(whole), len(lrs))
         torch.manual_seed(cfg.seed)
         model = build_model(model_name, num_features=pipeline.num_features)
-        refit_history = fit_schedule(model, pipeline, whole, cfg, lrs, on_epoch)
+        refit_history = fit_schedule(model, pipeline, whole, cfg, lrs, on_epoch, sources["whole"])
         refit_windows = len(whole)
+    # Calibration on the validation tails, as the model meets them (capture and filter
+    # drawn once with a fixed seed when augmenting); none without validation windows.
+    calib = None
+    if len(val_w):
+        xv = validation_features(pipeline, val_w, cfg, sources["val"])
+        calib = fit_temperature(predict_logits(model, xv), val_w.labels)
     meta = {
         "command": command,
         "split": split,
@@ -101,7 +124,9 @@ def train_model(
         "val_windows": len(val_w),
         "refit_epochs": len(refit_history),
         "refit_windows": refit_windows,
+        "temperature_fit": calib.to_dict() if calib else None,
     }
-    path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta)
+    temperature = calib.temperature if calib else 1.0
+    path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta, temperature)
     return TrainResult(path, history, len(fit_w), len(val_w), fit_w.skipped + val_w.skipped,
                        time.perf_counter() - t0, refit_history)  # fmt: skip

@@ -5,13 +5,36 @@ A low-pass filter whose cutoff rises with speed: still landmarks are smoothed ha
 smooths landmarks as the legacy `mp.solutions.pose` did, and the gesture data was
 recorded with smoothing, so live landmarks are smoothed before classification.
 Time comes from the frames (stream time), so gaps and replay speed are handled.
+
+One rule for live and training (docs/recognition.md, "One smoothing rule"): camera
+streams (the operator tracker), replayed landmark streams (engine/stream.py) and the
+training windows (gesture/augment.py, `one_euro_windows`) all pass the filter with
+`LIVE_ONE_EURO`, tuned on the measured live-path jitter by `bench/one_euro_tuning.py`
+(least position + velocity error; docs/capture.md), reset after `RESET_AFTER_S` unseen.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
+
+
+@dataclass(frozen=True)
+class OneEuroParams:
+    """A One Euro setting: `min_cutoff` (Hz), `beta`, `d_cutoff` (Hz)."""
+
+    min_cutoff: float
+    beta: float
+    d_cutoff: float
+
+
+# bench/one_euro_tuning.py's recommendation (bench/results/one_euro_tuning.json): at the
+# measured jitter 0.0129 torso lengths of position error (unfiltered 0.0134, the old
+# tracker setting (1, 30, 1) 0.0229) and 0.0138 of velocity error (0.0188, 0.0148).
+LIVE_ONE_EURO = OneEuroParams(min_cutoff=3.0, beta=100.0, d_cutoff=2.0)
+RESET_AFTER_S = 0.5  # a pose unseen this long starts the filter afresh (the tracker's rule)
 
 
 def _alpha(cutoff: np.ndarray | float, dt: float) -> np.ndarray | float:
@@ -58,3 +81,65 @@ class OneEuroFilter:
         self._x = self._x + _alpha(cutoff, dt) * (x - self._x)
         self._t = t
         return self._x.copy()
+
+
+def one_euro_windows(
+    x: np.ndarray,
+    t: np.ndarray,
+    params: OneEuroParams = LIVE_ONE_EURO,
+    reset_after_s: float = RESET_AFTER_S,
+) -> np.ndarray:
+    """`OneEuroFilter` run along axis 1 of a batch: `x` (N, T, ...) observed at times `t`
+    (N, T) seconds, each row its own filter started at its first frame, restarted after a
+    pause over `reset_after_s`. The same equations as the class (tested against it).
+
+    Raises:
+        ValueError: `t` is not (N, T) for `x`.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
+    if t.shape != x.shape[:2]:
+        raise ValueError(f"times {t.shape} do not match the batch {x.shape[:2]}")
+    out = np.empty_like(x)
+    extra = (1,) * (x.ndim - 2)
+    state = x[:, 0].copy()
+    dstate = np.zeros_like(state)
+    out[:, 0] = state
+    for k in range(1, x.shape[1]):
+        dt = (t[:, k] - t[:, k - 1]).reshape(-1, *extra)
+        restart = dt > reset_after_s
+        ok = dt > 0
+        safe = np.where(ok, dt, 1.0)
+        dx = (x[:, k] - state) / safe
+        a_d = 1.0 / (1.0 + 1.0 / (2.0 * math.pi * params.d_cutoff * safe))
+        new_d = dstate + a_d * (dx - dstate)
+        cutoff = params.min_cutoff + params.beta * np.abs(new_d)
+        a = 1.0 / (1.0 + 1.0 / (2.0 * math.pi * cutoff * safe))
+        new = state + a * (x[:, k] - state)
+        state = np.where(restart, x[:, k], np.where(ok, new, state))
+        dstate = np.where(restart, 0.0, np.where(ok, new_d, dstate))
+        out[:, k] = state
+    return out
+
+
+class PoseSmoother:
+    """The live rule for one stream of poses: `LIVE_ONE_EURO` (or `params`) on the
+    landmarks, restarted after a pause over `reset_after_s` or on `reset()`."""
+
+    def __init__(
+        self, params: OneEuroParams = LIVE_ONE_EURO, reset_after_s: float = RESET_AFTER_S
+    ) -> None:
+        self.filter = OneEuroFilter(params.min_cutoff, params.beta, params.d_cutoff)
+        self.reset_after_s = reset_after_s
+        self._last_t: float | None = None
+
+    def reset(self) -> None:
+        self.filter.reset()
+        self._last_t = None
+
+    def __call__(self, xyz: np.ndarray, t: float) -> np.ndarray:
+        """The smoothed landmarks (float32) of a pose seen at stream time `t`."""
+        if self._last_t is None or t - self._last_t > self.reset_after_s:
+            self.filter.reset()
+        self._last_t = t
+        return self.filter(xyz, t).astype(np.float32)

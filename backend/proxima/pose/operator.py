@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from proxima.pose.one_euro import OneEuroFilter
+from proxima.pose.one_euro import LIVE_ONE_EURO, OneEuroFilter
 from proxima.types import Pose, Sight
 
 SHOULDERS = (11, 12)
@@ -105,15 +105,16 @@ class OperatorTracker:
         switch_margin: float = 1.25,
         reset_after_s: float = 0.5,
         smooth: bool = True,
-        min_cutoff: float = 1.0,
-        beta: float = 30.0,
+        min_cutoff: float = LIVE_ONE_EURO.min_cutoff,
+        beta: float = LIVE_ONE_EURO.beta,
+        d_cutoff: float = LIVE_ONE_EURO.d_cutoff,
     ) -> None:
         self.gate = gate  # normalised distance allowed between consecutive frames
         self.gate_speed = gate_speed  # extra distance per second unseen
         self.max_gate = max_gate
         self.switch_margin = switch_margin
         self.reset_after_s = reset_after_s
-        self._filter = OneEuroFilter(min_cutoff, beta) if smooth else None
+        self._filter = OneEuroFilter(min_cutoff, beta, d_cutoff) if smooth else None
         self._locked = False
         self._centre: np.ndarray | None = None
         self._last_seen: float | None = None

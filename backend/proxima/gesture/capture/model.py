@@ -269,7 +269,8 @@ class CaptureModel:
         has_z: bool | np.ndarray = True,
         window: int | None = None,
         max_gap_s: float = MAX_GAP_S,
-    ) -> tuple[np.ndarray, np.ndarray]:
+        with_times: bool = False,
+    ) -> tuple[np.ndarray, ...]:
         """A batch of source windows (N, S, 33, 3) and (N, S, 33), rows 1/30 s apart, as
         the engine's window would hold them at the end of each: (N, W, 33, 3), (N, W, 33)
         with W = `window` (default S).
@@ -278,7 +279,8 @@ class CaptureModel:
         than W source rows: S must be at least `source_frames(W)`. Gaps are at most
         `max_gap_s` (a longer one restarts the live window, so no window the engine
         classifies holds one). In the rare draw where fewer than W frames survive, the
-        oldest losses are undone.
+        oldest losses are undone. With `with_times`, also each received pose's time
+        (N, W) in seconds (source row / 30), for a filter that runs over the window.
 
         Raises:
             CaptureError: bad shapes, or S too short for W at this model's frame rates.
@@ -316,6 +318,8 @@ class CaptureModel:
             vs = visibility[idx, lo] * (1 - frac[..., None]) + visibility[idx, hi] * frac[..., None]
         tau = rows / SOURCE_FPS
         out_x, out_v = self._effects(xs, vs, tau, k, rng, a, z)
+        if with_times:
+            return out_x.astype(np.float32), out_v.astype(np.float32), np.array(tau)
         return out_x.astype(np.float32), out_v.astype(np.float32)
 
     def _received_rows(

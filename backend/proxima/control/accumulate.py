@@ -1,0 +1,110 @@
+"""The evidence rule: a leaky running sum of calibrated log-likelihood ratios per gesture.
+
+The moving average asks three windows in a row for an averaged probability of 0.9. Under
+camera noise a gesture the classifier names consistently at 0.6-0.85 never gets there,
+and a lower threshold lets short confident blips through. Here each recognition adds,
+for every gesture c, the log-odds of its calibrated probability,
+llr_c = log p_c - log(1 - p_c) (clipped to +-`clip`), to a score that leaks with a
+half-life of `half_life_s` stream seconds and never falls below 0 (a CUSUM): a gesture
+named at 0.7 gains 0.85 a window and fires after a few, one named at 0.97 after two;
+a gesture the classifier keeps below 0.5 only loses, so a mix where no gesture holds the
+majority never fires. The action is the gesture of the highest score once that reaches
+`threshold` (or its own entry in `thresholds`). The probabilities should be calibrated
+(the checkpoint's temperature, gesture/calibration.py) for the log-odds to mean what
+they say. The score empties after a pause of `reset_after_s` or on `reset()`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from proxima.control.smoothing import FilteredAction, MovingAverageFilter
+
+if TYPE_CHECKING:
+    from proxima.control.config import ControlSettings
+
+P_FLOOR = 1e-6  # probabilities are clipped to [P_FLOOR, 1 - P_FLOOR] before the log-odds
+
+
+class DecisionFilter(Protocol):
+    """What the stream pipeline needs of a decision rule over recognitions."""
+
+    def reset(self) -> None: ...
+
+    def update(self, t: float, probs: np.ndarray) -> FilteredAction: ...
+
+
+class EvidenceAccumulator:
+    """Leaky CUSUM of calibrated log-odds per label (see the module)."""
+
+    def __init__(
+        self,
+        labels: Sequence[str],
+        threshold: float = 4.0,
+        half_life_s: float = 1.0,
+        clip: float = 3.0,
+        reset_after_s: float = 1.0,
+        thresholds: Mapping[str, float] | None = None,
+    ) -> None:
+        if threshold <= 0 or half_life_s <= 0 or clip <= 0:
+            raise ValueError(
+                f"evidence rule: threshold, half-life and clip must be > 0, "
+                f"got {threshold}, {half_life_s}, {clip}"
+            )
+        self.labels = tuple(labels)
+        self.threshold = threshold
+        self.thresholds = dict(thresholds or {})
+        self.half_life_s = half_life_s
+        self.clip = clip
+        self.reset_after_s = reset_after_s
+        self._need = np.array([self.thresholds.get(lab, threshold) for lab in self.labels])
+        self.reset()
+
+    @classmethod
+    def from_settings(cls, control: ControlSettings, labels: Sequence[str]) -> EvidenceAccumulator:
+        return cls(
+            labels,
+            control.evidence_threshold,
+            control.evidence_half_life_s,
+            control.evidence_clip,
+            control.filter_reset_s,
+            control.evidence_threshold_by_command,
+        )
+
+    def reset(self) -> None:
+        """Forget all evidence."""
+        self.score = np.zeros(len(self.labels))
+        self._last_t: float | None = None
+
+    def update(self, t: float, probs: np.ndarray) -> FilteredAction:
+        """Add one recognition (probabilities over `labels`) and decide. `confidence` is
+        the leading gesture's evidence as a share of its threshold (1 = it passes).
+
+        Raises:
+            ValueError: `probs` does not have one entry per label.
+        """
+        p = np.asarray(probs, dtype=np.float64).reshape(-1)
+        if p.shape[0] != len(self.labels):
+            raise ValueError(f"expected {len(self.labels)} probabilities, got {p.shape[0]}")
+        if self._last_t is not None and t - self._last_t > self.reset_after_s:
+            self.reset()
+        dt = 0.0 if self._last_t is None else max(t - self._last_t, 0.0)
+        decay = 0.5 ** (dt / self.half_life_s)
+        self._last_t = t
+        q = np.clip(p, P_FLOOR, 1.0 - P_FLOOR)
+        llr = np.clip(np.log(q) - np.log1p(-q), -self.clip, self.clip)
+        self.score = np.maximum(decay * self.score + llr, 0.0)
+        share = self.score / self._need
+        best = int(np.argmax(share))
+        action = self.labels[best] if share[best] >= 1.0 else ""
+        return FilteredAction(t=t, action=action, confidence=float(min(share[best], 1.0)), probs=p)
+
+
+def decision_filter(control: ControlSettings, labels: Sequence[str]) -> DecisionFilter:
+    """The decision rule `control.decision` names: the moving average or the evidence rule."""
+    if control.decision == "evidence":
+        return EvidenceAccumulator.from_settings(control, labels)
+    return MovingAverageFilter.from_settings(control, labels)

@@ -1,0 +1,164 @@
+"""Measurements of issue 21's robust recipe (bench/robust_training.py runs them):
+
+- `window_accuracy`: a checkpoint's window accuracy on a split's test parts as the live
+  engine would see them: each part captured whole (`CaptureModel.apply_clip`, one draw
+  per part), smoothed by the live One Euro filter (or not: `smooth=False`, what
+  `proxima evaluate` scores) and cut as the engine's window (`live_windows`, stride 5).
+- `captured_clips` / `decision_streams`: stitched held-out streams (the clips' temporal
+  test parts) with a capture condition applied to every clip before stitching, at 30 fps
+  (stitching joins 30 fps rows; frame-rate effects are left out of the streams), for the
+  offline replay of the engine's pipeline and decision rules (`replay.recognize`/`decide`).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from proxima.control import ControlSettings
+from proxima.engine.config import EngineSettings
+from proxima.engine.stream import Classifier
+from proxima.evaluation.latency import VIEWS, brief, evaluate_config, rank, utility
+from proxima.evaluation.replay import MemoClassifier, Recognitions, recognize
+from proxima.evaluation.stitch import StitchedStream, random_plan, stitch_views
+from proxima.gesture.capture import Captured, CaptureModel, live_windows
+from proxima.gesture.clip import Clip
+from proxima.pose.one_euro import one_euro_windows
+from proxima.types import GESTURES
+
+
+def smooth(captured: Captured) -> Captured:
+    """`captured` through the live One Euro filter (reset after a 0.5 s pause)."""
+    xyz = one_euro_windows(captured.xyz[None], captured.t[None])[0].astype(np.float32)
+    return replace(captured, xyz=xyz)
+
+
+def window_accuracy(
+    classifier: Any,
+    parts: Sequence[Clip],
+    model: CaptureModel,
+    seed: int,
+    smoothed: bool = True,
+    stride: int = 5,
+) -> dict[str, Any]:
+    """Accuracy and per-view accuracy of `classifier` on the engine's windows of `parts`
+    under `model` (see the module)."""
+    rng = np.random.default_rng(seed)
+    right: list[np.ndarray] = []
+    views: list[str] = []
+    for part in parts:
+        if len(part) < classifier.window + 1:
+            continue
+        cap = model.apply_clip(part, rng)
+        if smoothed:
+            cap = smooth(cap)
+        xyz, _, _ = live_windows(cap, classifier.window, stride)
+        if not len(xyz):
+            continue
+        probs = classifier.predict(xyz, aspect=part.aspect)
+        right.append(probs.argmax(1) == GESTURES.index(part.gesture))
+        views += [part.view] * len(xyz)
+    hits = np.concatenate(right) if right else np.zeros(0, bool)
+    v = np.asarray(views)
+    return {
+        "windows": len(hits),
+        "accuracy": round(float(hits.mean()), 4) if len(hits) else None,
+        "by_view": {str(k): round(float(hits[v == k].mean()), 4) for k in sorted(set(views))},
+    }
+
+
+def captured_clips(clips: Sequence[Clip], model: CaptureModel, seed: int) -> list[Clip]:
+    """Every clip through `model` at 30 fps (one draw per clip), as clips again."""
+    rng = np.random.default_rng(seed)
+    model = replace(model, fps=30.0)
+    out = []
+    for c in clips:
+        cap = model.apply_clip(c, rng)
+        frames = cap.frames.astype(np.int64)
+        out.append(replace(c, frames=frames, xyz=cap.xyz, visibility=cap.visibility))
+    return out
+
+
+def decision_streams(
+    clips: Sequence[Clip],
+    seeds: Sequence[int],
+    segments: int,
+    model: CaptureModel,
+) -> list[StitchedStream]:
+    """One stitched held-out stream per seed (views f, l, r in turn), its clips captured
+    under `model` with that seed first."""
+    out = []
+    for k, seed in enumerate(seeds):
+        view = VIEWS[k % len(VIEWS)]
+        source = captured_clips([c for c in clips if c.view == view], model, seed)
+        plan = random_plan(np.random.default_rng(seed), segments, 3.0, 6.0)
+        out.append(stitch_views(source, plan, (view,), "test", 0.5, 30.0, None, seed)[view])
+    return out
+
+
+def recognitions(
+    streams: Sequence[StitchedStream], classifier: Classifier, settings: EngineSettings
+) -> list[Recognitions]:
+    memo = MemoClassifier(classifier)
+    return [recognize(s, memo, settings, ControlSettings()) for s in streams]
+
+
+EVIDENCE_GRID: dict[str, list[Any]] = {
+    "evidence_threshold": [4.0, 6.0, 8.0, 12.0, 16.0, 24.0],
+    "evidence_half_life_s": [0.5, 1.0, 2.0],
+    "evidence_clip": [1.0, 1.5, 2.0, 3.0],
+    "confirm": [1, 2],
+}
+
+
+def tune_evidence(
+    sets: Sequence[tuple[Sequence[StitchedStream], Sequence[Recognitions]]],
+) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The evidence rule's grid on tuning streams (every set pooled: clean and field),
+    ranked by `latency.rank` (fewer than 1 wrong or spurious per hour, then most commands
+    within 2.5 s). Returns the best row and all rows."""
+    rows = []
+    for values in itertools.product(*EVIDENCE_GRID.values()):
+        params = dict(zip(EVIDENCE_GRID, values, strict=True))
+        control = ControlSettings(decision="evidence", **params)
+        summaries = [evaluate_config(s, r, control) for s, r in sets]
+        pooled = pool(summaries)
+        rows.append({**params, **pooled})
+    rows.sort(key=rank, reverse=True)
+    return rows[0], rows
+
+
+def pool(summaries: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Headline figures of several score summaries taken together (the worst p95, the
+    summed counts), with `utility` for `rank`."""
+    hours = sum(s["stream_hours"] for s in summaries)
+    expected = sum(s["expected_commands"] for s in summaries)
+    wrong = sum(s["wrong"] for s in summaries)
+    repeats = sum(s["repeats"] for s in summaries)
+    on_time = sum((s["on_time_rate"] or 0.0) * s["expected_commands"] for s in summaries)
+    given = sum((s["hit_rate"] or 0.0) * s["expected_commands"] for s in summaries)
+    p95 = [s["latency_p95_s"] for s in summaries if s["latency_p95_s"] is not None]
+    out = {
+        "expected_commands": expected,
+        "hit_rate": round(given / expected, 4) if expected else None,
+        "on_time_rate": round(on_time / expected, 4) if expected else None,
+        "latency_p95_s_worst": max(p95) if p95 else None,
+        "wrong": wrong,
+        "repeats": repeats,
+        "wrong_or_spurious_per_hour": round((wrong + repeats) / hours, 3) if hours else None,
+    }
+    out["utility"] = round(utility({**out, "expected_commands": expected}), 4)
+    return out
+
+
+def summary_row(summary: dict[str, Any]) -> dict[str, Any]:
+    """`latency.brief` plus the wrong pairs and misses by gesture."""
+    return {
+        **brief(summary),
+        "wrong_by_pair": summary["wrong_by_pair"],
+        "missed_by_gesture": summary["missed_by_gesture"],
+    }

@@ -1,0 +1,156 @@
+"""Issue 21 (items 2 and 3): capture-augmented training and the evidence decision rule.
+
+    python -m bench.robust_training windows --model NAME=CKPT:SPLIT ... --out J
+    python -m bench.robust_training streams --checkpoint T.pt --out J [--streams 12]
+
+`windows`: each checkpoint's window accuracy on its split's LASER test parts, as the
+engine sees them (captured whole, One Euro smoothed, cut every 5 frames), clean
+unsmoothed (what `proxima evaluate` scores), clean smoothed, `field` level 1 and 2
+(`proxima.evaluation.robust_training.window_accuracy`; seed 0).
+`streams`: stitched held-out streams of the temporal test parts, clean and under `field`
+level 1 (captured per clip at 30 fps), through the engine's pipeline (offline replay,
+the engine's own code); the evidence rule tuned on tuning streams (seeds 0..) of both
+conditions, then the moving average (today's defaults) against it on the evaluation
+streams (seeds 1000..). Writes the JSON to --out.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pickle
+import shlex
+import sys
+import time
+from pathlib import Path
+
+import torch
+
+from proxima.control import ControlSettings
+from proxima.engine.config import EngineSettings
+from proxima.evaluation.latency import evaluate_config
+from proxima.evaluation.robust_training import (
+    decision_streams,
+    pool,
+    recognitions,
+    summary_row,
+    tune_evidence,
+    window_accuracy,
+)
+from proxima.gesture.capture import condition
+from proxima.gesture.classifier import GestureClassifier
+from proxima.gesture.datasets import load_data
+from proxima.gesture.windows import WINDOW, split_clips
+
+CONDITIONS = {
+    "clean_unsmoothed": ("clean", 1, False),
+    "clean": ("clean", 1, True),
+    "field1": ("field", 1, True),
+    "field2": ("field", 2, True),
+}
+
+
+def log(msg: str) -> None:
+    print(f"[{time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
+
+
+def windows_cmd(args: argparse.Namespace) -> dict:
+    data = load_data(["laser"])
+    out: dict = {}
+    for spec in args.model:
+        name, _, rest = spec.partition("=")
+        path, _, split = rest.partition(".pt:")  # splits have colons of their own
+        path += ".pt"
+        clf = GestureClassifier.load(path)
+        test = split_clips(data.clips, split, WINDOW).test
+        row = {"checkpoint": path, "split": split, "temperature": clf.temperature}
+        for key, (cond, level, smoothed) in CONDITIONS.items():
+            row[key] = window_accuracy(clf, test, condition(cond, level), args.seed, smoothed)
+        out[name] = row
+        log(f"{name}: " + ", ".join(f"{k} {row[k]['accuracy']}" for k in CONDITIONS))
+    return out
+
+
+def streams_cmd(args: argparse.Namespace) -> dict:
+    clips = load_data(["laser"]).clips
+    clf = GestureClassifier.load(args.checkpoint)
+    settings = EngineSettings()
+    conds = {"clean": condition("clean"), "field1": condition("field", 1)}
+    tune_sets, eval_sets = {}, {}
+    cache = args.cache
+    if cache is not None and cache.is_file():  # the same checkpoint and stream options
+        tune_sets, eval_sets = pickle.loads(cache.read_bytes())
+        log(f"recognitions from {cache}")
+    for key, model in conds.items():
+        if key in eval_sets:
+            continue
+        t0 = time.perf_counter()
+        s = decision_streams(clips, range(args.tune_streams), args.segments, model)
+        tune_sets[key] = (s, recognitions(s, clf, settings))
+        s = decision_streams(clips, range(1000, 1000 + args.streams), args.segments, model)
+        eval_sets[key] = (s, recognitions(s, clf, settings))
+        log(f"{key}: streams recognised in {time.perf_counter() - t0:.0f} s")
+    if cache is not None and not cache.is_file():
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        cache.write_bytes(pickle.dumps((tune_sets, eval_sets)))
+    best, rows = tune_evidence(list(tune_sets.values()))
+    log(f"evidence rule selected: {best}")
+    keys = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
+    params = {k: best[k] for k in keys}
+    rules = {
+        "average": ControlSettings(),
+        "evidence": ControlSettings(decision="evidence", **params),
+    }
+    result: dict = {"tuning": {"selected": best, "top": rows[:10], "configs": len(rows)}}
+    for rule, control in rules.items():
+        per = {}
+        for key, (streams, recs) in eval_sets.items():
+            per[key] = summary_row(evaluate_config(streams, recs, control))
+        tuned = {k: pool([evaluate_config(s, r, control)]) for k, (s, r) in tune_sets.items()}
+        result[rule] = {"control": control.model_dump(), "eval": per, "tuning_streams": tuned}
+        log(f"{rule}: " + json.dumps({k: {m: v[m] for m in ('hit_rate', 'latency_p95_s', 'wrong')}
+                                       for k, v in per.items()}))  # fmt: skip
+    hours = {k: round(sum(x.duration_s for x in s) / 3600, 3) for k, (s, _) in eval_sets.items()}
+    result["streams"] = {
+        "eval_seeds": [1000, 1000 + args.streams - 1],
+        "tune_seeds": [0, args.tune_streams - 1],
+        "segments": args.segments,
+        "eval_hours": hours,
+        "checkpoint": args.checkpoint,
+        "temperature": clf.temperature,
+    }
+    return result
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    w = sub.add_parser("windows")
+    w.add_argument("--model", action="append", required=True, help="NAME=CKPT.pt:SPLIT")
+    w.add_argument("--seed", type=int, default=0)
+    w.add_argument("--out", type=Path, required=True)
+    s = sub.add_parser("streams")
+    s.add_argument("--checkpoint", required=True)
+    s.add_argument("--streams", type=int, default=12)
+    s.add_argument("--tune-streams", type=int, default=6)
+    s.add_argument("--segments", type=int, default=40)
+    s.add_argument("--out", type=Path, required=True)
+    s.add_argument("--cache", type=Path, help="pickle of the recognitions (made if absent)")
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    t0 = time.perf_counter()
+    result = windows_cmd(args) if args.cmd == "windows" else streams_cmd(args)
+    doc = {
+        "benchmark": f"robust_training {args.cmd}",
+        "command": "python -m bench.robust_training " + shlex.join(sys.argv[1:]),
+        "date": time.strftime("%Y-%m-%d"),
+        "result": result,
+        "seconds": round(time.perf_counter() - t0, 1),
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(doc, indent=1))
+    log(f"wrote {args.out} ({doc['seconds']} s)")
+
+
+if __name__ == "__main__":
+    main()
