@@ -58,13 +58,14 @@ ARMS = (11, 12, 13, 14, 15, 16)  # MediaPipe shoulders, elbows, wrists
 
 def temperature(classifier: object, labels: Sequence[str]) -> np.ndarray:
     """The classifier's per-class temperature (its `temperature` attribute, a number or
-    one per label), 1 for every class when it has none.
+    one per label), 1 for every class when it has none or when its probabilities are
+    calibrated already (`applies_temperature`, as `GestureClassifier`'s are).
 
     Raises:
         ValueError: a temperature that is not positive or not one per label.
     """
     value = getattr(classifier, "temperature", None)
-    if value is None:
+    if value is None or getattr(classifier, "applies_temperature", False):
         return np.ones(len(labels))
     temp = np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1), (len(labels),))
     if not np.all(temp > 0):
