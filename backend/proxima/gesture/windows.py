@@ -204,6 +204,29 @@ def calibration_parts(clip: Clip, seconds: float, window: int) -> tuple[Clip, Cl
     return clip.slice(0, end), clip.slice(rest, len(clip))
 
 
+def calibration_split(
+    clips: Sequence[Clip],
+    split: str,
+    inner_split: str,
+    seconds: float,
+    window: int = WINDOW,
+    uav_dir: Path | None = None,
+) -> SplitParts:
+    """`calibrate:<inner_split>:<seconds>` (see `split_clips`)."""
+    inner = split_clips(clips, inner_split, window, uav_dir)
+    calib: list[Clip] = []
+    test: list[Clip] = []
+    for c in inner.test:
+        a, b = calibration_parts(c, seconds, window)
+        if len(a):
+            calib.append(a)
+        if len(b):
+            test.append(b)
+    if not test:
+        raise DataError(f"split {split!r}: {seconds:g} s leaves no test frames in any clip")
+    return SplitParts(split, inner.train + calib, test, calib)
+
+
 def split_clips(
     clips: Sequence[Clip], split: str, window: int = WINDOW, uav_dir: Path | None = None
 ) -> SplitParts:
@@ -219,18 +242,7 @@ def split_clips(
     """
     calibration = parse_calibration(split)
     if calibration is not None:
-        inner_split, seconds = calibration
-        inner = split_clips(clips, inner_split, window, uav_dir)
-        calib, test = [], []
-        for c in inner.test:
-            a, b = calibration_parts(c, seconds, window)
-            if len(a):
-                calib.append(a)
-            if len(b):
-                test.append(b)
-        if not test:
-            raise DataError(f"split {split!r}: {seconds:g} s leaves no test frames in any clip")
-        return SplitParts(split, inner.train + calib, test, calib)
+        return calibration_split(clips, split, *calibration, window, uav_dir)
     kind, _, arg = split.partition(":")
     train: list[Clip] = []
     test: list[Clip] = []
