@@ -80,7 +80,9 @@ def score(clf: Any, parts: Sequence[Any], stride: int = 3) -> dict[str, Any]:
     }
 
 
-def evaluate_point(clf: Any, clips: Sequence[Any], uav_dir: Any, inner: str, seconds: float) -> dict:
+def evaluate_point(
+    clf: Any, clips: Sequence[Any], uav_dir: Any, inner: str, seconds: float
+) -> dict:
     """A model's scores on the point's own remainder and on each common tail."""
     from proxima.gesture.windows import WINDOW, calibration_parts, split_clips
 
@@ -137,8 +139,9 @@ def run_group(args: argparse.Namespace) -> None:
         points.append(row)
         save()
         tails = {k: v["accuracy"] for k, v in row.items() if k.startswith("tail")}
-        print(f"{split} {seconds:g}s {recipe}: remainder {row['remainder']['accuracy']} "
-              f"({row['remainder']['windows']} windows) tails {tails} [{t:.0f} s]", flush=True)  # fmt: skip
+        rem = row["remainder"]
+        print(f"{split} {seconds:g}s {recipe}: remainder {rem['accuracy']} "
+              f"({rem['windows']} windows) tails {tails} [{t:.0f} s]", flush=True)  # fmt: skip
 
     base: dict[str, Path] = {}
     for split in splits:  # the inner models: the 0 s point and what fine-tuning starts from
@@ -229,8 +232,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--split", action="append", help="only these inner splits of the group")
     ap.add_argument("--merge", action="store_true")
     ap.add_argument("--seconds", type=float, nargs="+", default=[5.0, 0.0, 2.0, 10.0])
-    ap.add_argument("--recipes", nargs="+", default=["finetune", "scratch"],
-                    help="the first is the curve's; the others run at --compare points")  # fmt: skip
+    ap.add_argument(
+        "--recipes", nargs="+", default=["finetune", "scratch"],
+        help="the first is the curve's; the others run at --compare points",
+    )  # fmt: skip
     ap.add_argument("--compare", type=float, nargs="*", default=[5.0])
     ap.add_argument("--epochs", type=int, default=20, help="inner and scratch models")
     ap.add_argument("--patience", type=int, default=5)
