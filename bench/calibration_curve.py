@@ -182,7 +182,40 @@ def merge() -> None:
             merged["groups"][group] = json.loads(f.read_text())
     (RESULTS / "calibration-curve.json").write_text(json.dumps(merged, indent=1))
     plot(merged, RESULTS / "calibration-curve.png")
+    print(table(merged))
     print(f"wrote {RESULTS / 'calibration-curve.json'} and .png")
+
+
+def table(merged: dict[str, Any]) -> str:
+    """Markdown: one row per split, seconds and recipe; remainder and tails, with the
+    windows and clips each is scored on, and the worst person's remainder accuracy."""
+
+    def cell(r: dict[str, Any] | None) -> str:
+        if not r or r["accuracy"] is None:
+            return "-"
+        return f"{r['accuracy']:.3f} ({r['windows']} w, {r['clips']} clips)"
+
+    lines = [
+        "| split | s | recipe | remainder | tail after 5 s | tail after 10 s | clip acc. "
+        "(remainder) | worst person / clip (remainder) | epochs |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for res in merged["groups"].values():
+        for p in sorted(res["points"], key=lambda p: (p["split"], p["seconds"], p["recipe"])):
+            rem = p["remainder"]
+            worst = "-"
+            if rem.get("per_person") and len(rem["per_person"]) > 1:
+                name, v = min(rem["per_person"].items(), key=lambda kv: kv[1]["accuracy"])
+                worst = f"{name} {v['accuracy']:.3f}"
+            elif rem.get("per_clip"):
+                name, v = min(rem["per_clip"].items(), key=lambda kv: kv[1]["accuracy"])
+                worst = f"{name} {v['accuracy']:.3f}"
+            lines.append(
+                f"| {p['split']} | {p['seconds']:g} | {p['recipe']} | {cell(rem)} | "
+                f"{cell(p.get('tail_5s'))} | {cell(p.get('tail_10s'))} | "
+                f"{rem.get('clip_accuracy', '-')} | {worst} | {p['epochs'] or 'cached'} |"
+            )
+    return "\n".join(lines)
 
 
 def plot(merged: dict[str, Any], path: Path) -> None:
