@@ -109,7 +109,7 @@ def run_group(args: argparse.Namespace) -> None:
     data_name, splits = GROUPS[args.group]
     splits = tuple(args.split) if args.split else splits
     data = load_data([data_name])
-    out = RESULTS / f"calibration-curve.{args.group}.json"
+    out = RESULTS / f"calibration-curve.{args.group}{args.tag}.json"
     result: dict[str, Any] = json.loads(out.read_text()) if out.exists() and args.resume else {}
     result.setdefault("config", {}).update(
         epochs=args.epochs, patience=args.patience, tune_epochs=args.tune_epochs,
@@ -177,9 +177,14 @@ def merge() -> None:
     """calibration-curve.json (both groups) and calibration-curve.png."""
     merged: dict[str, Any] = {"groups": {}}
     for group in GROUPS:
-        f = RESULTS / f"calibration-curve.{group}.json"
-        if f.exists():
-            merged["groups"][group] = json.loads(f.read_text())
+        # a group's main run and any runs beside it (`--tag`), each point once
+        for f in sorted(RESULTS.glob(f"calibration-curve.{group}*.json")):
+            res = json.loads(f.read_text())
+            into = merged["groups"].setdefault(group, {"config": res["config"], "points": []})
+            have = {(p["split"], p["seconds"], p["recipe"]) for p in into["points"]}
+            into["points"] += [
+                p for p in res["points"] if (p["split"], p["seconds"], p["recipe"]) not in have
+            ]
     (RESULTS / "calibration-curve.json").write_text(json.dumps(merged, indent=1))
     plot(merged, RESULTS / "calibration-curve.png")
     print(table(merged))
@@ -276,6 +281,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--resume", action="store_true", help="keep the points already in the JSON")
+    ap.add_argument("--tag", default="", help="write calibration-curve.<group><tag>.json")
     args = ap.parse_args(argv)
     if args.merge:
         merge()
