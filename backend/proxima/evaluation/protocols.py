@@ -12,6 +12,7 @@ from typing import Any
 
 from proxima.evaluation.metrics import evaluate_checkpoint
 from proxima.gesture.train import TrainConfig
+from proxima.gesture.windows import parse_calibration
 from proxima.gesture.workflow import train_model
 
 LASER_PROTOCOLS = ("temporal", "cross-view:f", "cross-view:l", "cross-view:r")
@@ -35,7 +36,8 @@ def run_protocols(
             folder = keep_dir or Path(tmp)
             ckpt = folder / f"{model}-{split.replace(':', '-')}.pt"
             tr = train_model(data, model, split, ckpt, replace(cfg))
-            ev_data = data if split.startswith("uav-gesture") else (eval_data or data)
+            inner = (parse_calibration(split) or (split, 0.0))[0]
+            ev_data = data if inner.startswith("uav-gesture") else (eval_data or data)
             m = evaluate_checkpoint(ckpt, ev_data, split)
             row = {
                 "split": split,

@@ -20,7 +20,11 @@ DataOpt = Annotated[
 ]
 SplitOpt = Annotated[
     str,
-    typer.Option(help="temporal | cross-view:f|l|r | all | uav-gesture:1|2|3"),
+    typer.Option(
+        help="temporal | cross-view:f|l|r | all | uav-gesture:1|2|3 | calibrate:SPLIT:SECONDS "
+        "(SPLIT's training part plus the first SECONDS of each held-out clip train; the "
+        "rest of each held-out clip, after a one-window gap, tests)"
+    ),
 ]
 
 
@@ -68,6 +72,13 @@ def train(
             "(validation tails included) for the chosen epochs."
         ),
     ] = False,
+    init: Annotated[
+        Path | None,
+        typer.Option(
+            help="With a calibrate:SPLIT:SECONDS split: fine-tune this checkpoint of SPLIT "
+            "(trained with --split SPLIT) for --epochs instead of training from scratch."
+        ),
+    ] = None,
 ) -> None:
     """Train a gesture model on a split's training part and save one self-contained file."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -109,10 +120,26 @@ def train(
 
         try:
             result = train_model(
-                data, model, split, out, cfg, pipeline, command, on_epoch, on_start, on_refit
+                data,
+                model,
+                split,
+                out,
+                cfg,
+                pipeline,
+                command,
+                on_epoch,
+                on_start,
+                on_refit,
+                init,
             )
-        except (DataError, ValueError) as exc:
+        except (DataError, ValueError, FileNotFoundError) as exc:
             _fail(exc)
+    if init is not None:  # no validation: every epoch ran
+        typer.echo(
+            f"saved {result.checkpoint}: fine-tuned {init} for {len(result.history)} epochs "
+            f"(last loss {result.history[-1].train_loss:.3f}), {result.seconds:.0f} s"
+        )
+        return
     best = min(result.history, key=lambda h: h.val_loss)
     typer.echo(
         f"saved {result.checkpoint} ({result.checkpoint.stat().st_size / 1024:.0f} KiB): "

@@ -8,6 +8,7 @@ offered here.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,6 +23,14 @@ TEMPORAL_TRAIN_FRACTION = 0.7
 # Sources that only ever train: synthetic clips are not recordings of anyone, so no
 # split scores on them; every test part holds real clips only.
 TRAIN_ONLY_SOURCES = frozenset({"synth"})
+# Frames a second of each source's recordings, for splits that count in seconds. LASER:
+# 30 fps. UAV-Gesture: 25 fps, the frame rate of its 1920x1080 videos in the data set's
+# paper (Perera et al. 2018); the joint files themselves carry no rate. Synthetic: 30.
+SOURCE_FPS = {"laser": 30.0, "uav-gesture": 25.0, "synth": 30.0}
+CALIBRATE = "calibrate"
+# Inner splits a calibration can follow: those that hold out whole clips of a new view
+# or new people (the temporal split's test parts are tails of seen clips).
+CALIBRATABLE = ("cross-view", "uav-gesture")
 
 
 @dataclass
@@ -134,6 +143,8 @@ class SplitParts:
     name: str
     train: list[Clip]
     test: list[Clip]
+    # `calibrate:` splits only: the first seconds of each held-out clip (also in `train`)
+    calibration: list[Clip] = field(default_factory=list)
 
 
 def temporal_parts(clip: Clip, window: int) -> tuple[Clip, Clip]:
@@ -142,16 +153,96 @@ def temporal_parts(clip: Clip, window: int) -> tuple[Clip, Clip]:
     return clip.slice(0, max(cut - window, 0)), clip.slice(cut, len(clip))
 
 
+def clip_fps(clip: Clip) -> float:
+    """The frame rate of a clip's recording (`SOURCE_FPS`)."""
+    try:
+        return SOURCE_FPS[clip.source]
+    except KeyError:
+        raise DataError(f"{clip.name}: no known frame rate for source {clip.source!r}") from None
+
+
+def parse_calibration(split: str) -> tuple[str, float] | None:
+    """(inner split, seconds) of `calibrate:<split>:<seconds>`, or None for other splits.
+    The seconds are the last field: the inner split has colons of its own.
+
+    Raises:
+        DataError: a malformed calibration split; the message names the bad field.
+    """
+    kind, _, rest = split.partition(":")
+    if kind != CALIBRATE:
+        return None
+    inner, sep, seconds = rest.rpartition(":")
+    usage = "use calibrate:<split>:<seconds>, e.g. calibrate:cross-view:l:5"
+    if not sep or not inner:
+        raise DataError(f"split {split!r}: {usage}")
+    try:
+        value = float(seconds)
+    except ValueError:
+        raise DataError(
+            f"split {split!r}: the seconds field {seconds!r} is not a number ({usage})"
+        ) from None
+    if not math.isfinite(value) or value < 0:
+        raise DataError(f"split {split!r}: the seconds field must be a number >= 0, not {seconds}")
+    if inner.partition(":")[0] not in CALIBRATABLE:
+        raise DataError(
+            f"split {split!r}: the inner split {inner!r} must hold out whole clips: "
+            "cross-view:f|l|r or uav-gesture:1|2|3"
+        )
+    return inner, value
+
+
+def calibration_parts(clip: Clip, seconds: float, window: int) -> tuple[Clip, Clip]:
+    """(the first `seconds` of a clip, the rest after a one-window gap). Seconds count in
+    the clip's own frame rate from its first frame with a person, by frame number, so a
+    gap of missing frames counts as time. With 0 s the rest is the whole clip."""
+    n = round(seconds * clip_fps(clip))
+    if n == 0:
+        return clip.slice(0, 0), clip
+    start = int(clip.frames[0])
+    end = int(np.searchsorted(clip.frames, start + n))  # rows of frames < start + n
+    rest = int(np.searchsorted(clip.frames, start + n + window))  # window frames skipped
+    return clip.slice(0, end), clip.slice(rest, len(clip))
+
+
+def calibration_split(
+    clips: Sequence[Clip],
+    split: str,
+    inner_split: str,
+    seconds: float,
+    window: int = WINDOW,
+    uav_dir: Path | None = None,
+) -> SplitParts:
+    """`calibrate:<inner_split>:<seconds>` (see `split_clips`)."""
+    inner = split_clips(clips, inner_split, window, uav_dir)
+    calib: list[Clip] = []
+    test: list[Clip] = []
+    for c in inner.test:
+        a, b = calibration_parts(c, seconds, window)
+        if len(a):
+            calib.append(a)
+        if len(b):
+            test.append(b)
+    if not test:
+        raise DataError(f"split {split!r}: {seconds:g} s leaves no test frames in any clip")
+    return SplitParts(split, inner.train + calib, test, calib)
+
+
 def split_clips(
     clips: Sequence[Clip], split: str, window: int = WINDOW, uav_dir: Path | None = None
 ) -> SplitParts:
-    """Apply a named split: `temporal`, `cross-view:f|l|r`, `all`, `uav-gesture:1|2|3`.
+    """Apply a named split: `temporal`, `cross-view:f|l|r`, `all`, `uav-gesture:1|2|3`,
+    or `calibrate:<cross-view or uav-gesture split>:<seconds>`: the inner split's
+    training part plus the first seconds of each of its test clips train, the rest of
+    each test clip after a one-window gap tests (`calibration_parts`).
     Clips of `TRAIN_ONLY_SOURCES` (synthetic) go whole to the training part of every
     split; the test parts hold real clips only.
 
     Raises:
         DataError: unknown split, or one that leaves no training or no test data.
     """
+    calibration = parse_calibration(split)
+    if calibration is not None:
+        return calibration_split(clips, split, *calibration, window, uav_dir)
     kind, _, arg = split.partition(":")
     train: list[Clip] = []
     test: list[Clip] = []
@@ -189,7 +280,8 @@ def split_clips(
                 test.append(c)
     else:
         raise DataError(
-            f"unknown split {split!r}: use temporal, cross-view:f|l|r, all or uav-gesture:1|2|3"
+            f"unknown split {split!r}: use temporal, cross-view:f|l|r, all, uav-gesture:1|2|3 "
+            "or calibrate:<split>:<seconds>"
         )
     if not train:
         raise DataError(f"split {split!r} leaves no training data")

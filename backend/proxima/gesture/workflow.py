@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import torch
 
 from proxima.gesture.calibration import fit_temperature
-from proxima.gesture.classifier import save_checkpoint
-from proxima.gesture.clip import Clip
+from proxima.gesture.classifier import GestureClassifier, save_checkpoint
+from proxima.gesture.clip import Clip, DataError
 from proxima.gesture.datasets import load_data
 from proxima.gesture.features import make_pipeline
 from proxima.gesture.geometry import to_metric
@@ -28,7 +28,22 @@ from proxima.gesture.train import (
     predict_logits,
     validation_features,
 )
-from proxima.gesture.windows import WINDOW, Windows, make_windows, split_clips, validation_parts
+from proxima.gesture.windows import (
+    WINDOW,
+    SplitParts,
+    Windows,
+    make_windows,
+    parse_calibration,
+    split_clips,
+    validation_parts,
+)
+
+# A calibration's few windows (5 s of each clip: about 300 against 4,300 of the inner
+# split's training part) are repeated to make about this share of each epoch; each copy
+# is augmented afresh, so the repeats are not identical.
+CALIBRATION_SHARE = 0.25
+# Fine-tuning (`init`) trains at this fraction of the configured learning rate.
+FINE_TUNE_LR = 0.25
 
 
 @dataclass
@@ -54,6 +69,57 @@ def fit_and_validation_windows(
     return fit_w, make_windows(val_parts, WINDOW, stride, max_gap, names)
 
 
+def calibration_parts(
+    parts: SplitParts, stride: int, max_gap: int
+) -> tuple[list[Clip], list[Clip], int]:
+    """(fit parts, validation parts, repeats) of a `calibrate:` split: the inner split's
+    training part splits into fit and validation tails as always; the calibration parts
+    (too short to lose a tail) only fit, repeated `repeats` times (`CALIBRATION_SHARE`).
+    Validation therefore holds no frame of the held-out clips."""
+    calib_ids = {id(c) for c in parts.calibration}
+    inner = [c for c in parts.train if id(c) not in calib_ids]
+    fit_parts, val_parts = validation_parts(inner, WINDOW)
+    n_inner = len(make_windows(fit_parts, WINDOW, stride, max_gap))
+    n_calib = len(make_windows(parts.calibration, WINDOW, stride, max_gap))
+    repeats = 1
+    if n_calib:
+        repeats = max(1, round(CALIBRATION_SHARE * n_inner / ((1 - CALIBRATION_SHARE) * n_calib)))
+    return list(fit_parts) + list(parts.calibration) * repeats, list(val_parts), repeats
+
+
+def calibration_fit_windows(
+    parts: SplitParts, stride: int, max_gap: int
+) -> tuple[Windows, Windows, int]:
+    """(fit, validation, repeats) windows of a `calibrate:` split (`calibration_parts`)."""
+    fit_parts, val_parts, repeats = calibration_parts(parts, stride, max_gap)
+    names: list[str] = []
+    fit_w = make_windows(fit_parts, WINDOW, stride, max_gap, names)
+    return fit_w, make_windows(val_parts, WINDOW, stride, max_gap, names), repeats
+
+
+def load_init(path: str | Path, split: str, model_name: str) -> GestureClassifier:
+    """The checkpoint a calibration fine-tunes: it must have trained on the calibration
+    split's inner split, so it has never seen the held-out clips (the shipped model,
+    trained on every clip, has).
+
+    Raises:
+        DataError: not a calibration split, or a checkpoint of another split or model.
+    """
+    calibration = parse_calibration(split)
+    if calibration is None:
+        raise DataError(f"--init fine-tunes a calibration split (calibrate:...), not {split!r}")
+    clf = GestureClassifier.load(path)
+    trained_on = clf.metadata.get("split")
+    if trained_on != calibration[0]:
+        raise DataError(
+            f"--init {path}: trained on split {trained_on!r}, not {calibration[0]!r}: "
+            "a calibration fine-tunes the inner split's model, which never saw the held-out clips"
+        )
+    if clf.model_name != model_name:
+        raise DataError(f"--init {path}: a {clf.model_name} model, not {model_name}")
+    return clf
+
+
 def train_model(
     data_specs: Sequence[str] | None,
     model_name: str,
@@ -65,41 +131,60 @@ def train_model(
     on_epoch: Callable[[EpochLog], None] | None = None,
     on_start: Callable[[int, int, int], None] | None = None,
     on_refit: Callable[[int, int], None] | None = None,
+    init: str | Path | None = None,
 ) -> TrainResult:
     """Train a model on a split's training part and save a self-contained checkpoint.
 
     Early stopping chooses the epochs on the validation tails; with `cfg.refit` a fresh
     model then trains on the whole training part for those epochs, at the learning
     rates the first run used, and is the one saved. `on_refit(windows, epochs)` is
-    called when the refit starts; `on_epoch` is called for both runs' epochs."""
+    called when the refit starts; `on_epoch` is called for both runs' epochs.
+
+    `init` (calibration splits only, see `load_init`): fine-tune that checkpoint, with its
+    pipeline, for `cfg.epochs` at `FINE_TUNE_LR` of the rate, without early stopping (the
+    validation tails hold no frame of the new view or people, so they cannot say when
+    it has adapted)."""
     t0 = time.perf_counter()
     check_augment(cfg)
     data = load_data(data_specs)
-    train = split_clips(data.clips, split, WINDOW, data.uav_dir).train
-    fit_w, val_w = fit_and_validation_windows(train, cfg.stride, cfg.max_gap)
-    fit_parts, val_parts = validation_parts(train, WINDOW)
+    init_clf = load_init(init, split, model_name) if init is not None else None
+    parts = split_clips(data.clips, split, WINDOW, data.uav_dir)
+    train = parts.train
+    repeats = 0
+    if parts.calibration:
+        fit_parts, val_parts, repeats = calibration_parts(parts, cfg.stride, cfg.max_gap)
+    else:
+        fit_parts, val_parts = validation_parts(train, WINDOW)
+    names: list[str] = []
+    fit_w = make_windows(fit_parts, WINDOW, cfg.stride, cfg.max_gap, names)
+    val_w = make_windows(val_parts, WINDOW, cfg.stride, cfg.max_gap, names)
+    # the refit's whole training part, with the calibration's weight as in fit
+    whole_parts = list(train) + list(parts.calibration) * max(repeats - 1, 0)
     sources: dict[str, CaptureSource | None] = {"fit": None, "val": None, "whole": None}
     if cfg.augment == "capture":  # the rows before each window (robust.py)
         rows = history_rows(cfg.capture_mix)
-        for key, parts in (("fit", fit_parts), ("val", val_parts), ("whole", train)):
+        for key, ps in (("fit", fit_parts), ("val", val_parts), ("whole", whole_parts)):
             if key != "whole" or cfg.refit:
-                sources[key] = CaptureSource.from_parts(
-                    parts, WINDOW, cfg.stride, cfg.max_gap, rows
-                )
+                sources[key] = CaptureSource.from_parts(ps, WINDOW, cfg.stride, cfg.max_gap, rows)
     if on_start:
         on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
-    pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
-    pipeline.fit(to_metric(fit_w.xyz, fit_w.aspect))
-    torch.manual_seed(cfg.seed)  # the initial weights too: one seed, one model
-    model = build_model(model_name, num_features=pipeline.num_features)
-    history = fit(
-        model, pipeline, fit_w, val_w, cfg, on_epoch, None, sources["fit"], sources["val"]
-    )
+    if init_clf is not None:
+        pipeline, model = init_clf.pipeline, init_clf.model
+        tune = replace(cfg, lr=cfg.lr * FINE_TUNE_LR)
+        history = fit(model, pipeline, fit_w, None, tune, on_epoch, None, sources["fit"], None)
+    else:
+        pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
+        pipeline.fit(to_metric(fit_w.xyz, fit_w.aspect))
+        torch.manual_seed(cfg.seed)  # the initial weights too: one seed, one model
+        model = build_model(model_name, num_features=pipeline.num_features)
+        history = fit(
+            model, pipeline, fit_w, val_w, cfg, on_epoch, None, sources["fit"], sources["val"]
+        )
     refit_history: list[EpochLog] = []
     refit_windows = 0
-    if cfg.refit and len(val_w):
+    if cfg.refit and len(val_w) and init_clf is None:
         # the whole training part: fit, the gaps before the validation tails, the tails
-        whole = make_windows(train, WINDOW, cfg.stride, cfg.max_gap)
+        whole = make_windows(whole_parts, WINDOW, cfg.stride, cfg.max_gap)
         lrs = chosen_schedule(history, cfg.lr)
         if on_refit:
             on_refit(len(whole), len(lrs))
@@ -125,6 +210,8 @@ def train_model(
         "refit_epochs": len(refit_history),
         "refit_windows": refit_windows,
         "temperature_fit": calib.to_dict() if calib else None,
+        "calibration_repeats": repeats,
+        "init": str(init) if init is not None else None,
     }
     temperature = calib.temperature if calib else 1.0
     path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta, temperature)
