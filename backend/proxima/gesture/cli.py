@@ -61,6 +61,13 @@ def train(
             "(validation tails included) for the chosen epochs."
         ),
     ] = False,
+    init: Annotated[
+        Path | None,
+        typer.Option(
+            help="Start from this checkpoint's weights (fine-tuning), e.g. one "
+            "pretrained on synthetic clips."
+        ),
+    ] = None,
 ) -> None:
     """Train a gesture model on a split's training part and save one self-contained file."""
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -102,9 +109,10 @@ def train(
 
         try:
             result = train_model(
-                data, model, split, out, cfg, pipeline, command, on_epoch, on_start, on_refit
-            )
-        except (DataError, ValueError) as exc:
+                data, model, split, out, cfg, pipeline, command,
+                on_epoch, on_start, on_refit, init,
+            )  # fmt: skip
+        except (DataError, ValueError, FileNotFoundError) as exc:
             _fail(exc)
     best = min(result.history, key=lambda h: h.val_loss)
     typer.echo(
