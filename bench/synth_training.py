@@ -128,9 +128,23 @@ def collect(rows_dir: Path, out: Path) -> list[dict[str, Any]]:
     return rows
 
 
+def table(rows: list[dict[str, Any]]) -> str:
+    """Markdown: one line per recipe, window accuracy per split (clip accuracy after /)."""
+    splits = [s for s in SPLITS if any(r["split"] == s for r in rows)]
+    lines = ["| recipe | " + " | ".join(splits) + " |", "|---" * (len(splits) + 1) + "|"]
+    for recipe in RECIPES:
+        got = {r["split"]: r for r in rows if r["recipe"] == recipe}
+        if got:
+            cells = [f"{got[s]['accuracy']:.3f} / {got[s]['clip_accuracy']:.2f}"
+                     if s in got else "" for s in splits]  # fmt: skip
+            lines.append(f"| {recipe} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--synth", type=Path, required=True, help="folder from `proxima synth`")
+    ap.add_argument("--collect", action="store_true", help="only gather --rows into --json")
     ap.add_argument("--recipe", action="append", choices=RECIPES, help="default: all")
     ap.add_argument("--split", action="append", help="default: cross-view f/l/r, uav 1-3")
     ap.add_argument("--epochs", type=int, default=15)
@@ -145,6 +159,9 @@ def main(argv: list[str] | None = None) -> None:
     cfg = TrainConfig(epochs=a.epochs, patience=a.patience, stride=a.stride, seed=a.seed,
                       threads=a.threads)  # fmt: skip
     a.rows.mkdir(parents=True, exist_ok=True)
+    if a.collect:
+        print(table(collect(a.rows, a.json)))
+        return
     pretrained = a.rows / "synth-only.pt"
     for recipe in a.recipe or RECIPES:
         if recipe in ("synth-only", "pretrain"):
@@ -157,7 +174,7 @@ def main(argv: list[str] | None = None) -> None:
             row_file.write_text(json.dumps(row, indent=1))
             print(f"{recipe} {split}: {row['accuracy']:.3f} (clip {row['clip_accuracy']:.3f})",
                   flush=True)  # fmt: skip
-    collect(a.rows, a.json)
+    print(table(collect(a.rows, a.json)))
 
 
 if __name__ == "__main__":
