@@ -75,8 +75,9 @@ def train(
     init: Annotated[
         Path | None,
         typer.Option(
-            help="With a calibrate:SPLIT:SECONDS split: fine-tune this checkpoint of SPLIT "
-            "(trained with --split SPLIT) for --epochs instead of training from scratch."
+            help="A checkpoint to start from. With a calibrate:SPLIT:SECONDS split: fine-tune "
+            "this checkpoint of SPLIT (trained with --split SPLIT) for --epochs; with any other "
+            "split: start from its weights and train as usual (e.g. synthetic pretraining)."
         ),
     ] = None,
 ) -> None:
@@ -134,7 +135,7 @@ def train(
             )
         except (DataError, ValueError, FileNotFoundError) as exc:
             _fail(exc)
-    if init is not None:  # no validation: every epoch ran
+    if init is not None and split.startswith("calibrate:"):  # no validation: every epoch ran
         typer.echo(
             f"saved {result.checkpoint}: fine-tuned {init} for {len(result.history)} epochs "
             f"(last loss {result.history[-1].train_loss:.3f}), {result.seconds:.0f} s"

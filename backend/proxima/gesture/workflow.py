@@ -14,7 +14,7 @@ from proxima.gesture.calibration import fit_temperature
 from proxima.gesture.classifier import GestureClassifier, save_checkpoint
 from proxima.gesture.clip import Clip, DataError
 from proxima.gesture.datasets import load_data
-from proxima.gesture.features import make_pipeline
+from proxima.gesture.features import Pipeline, make_pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
 from proxima.gesture.robust import CaptureSource, history_rows
@@ -140,14 +140,21 @@ def train_model(
     rates the first run used, and is the one saved. `on_refit(windows, epochs)` is
     called when the refit starts; `on_epoch` is called for both runs' epochs.
 
-    `init` (calibration splits only, see `load_init`): fine-tune that checkpoint, with its
-    pipeline, for `cfg.epochs` at `FINE_TUNE_LR` of the rate, without early stopping (the
-    validation tails hold no frame of the new view or people, so they cannot say when
-    it has adapted)."""
+    `init`: with a calibration split (see `load_init`), fine-tune that checkpoint, with
+    its pipeline, for `cfg.epochs` at `FINE_TUNE_LR` of the rate, without early stopping
+    (the validation tails hold no frame of the new view or people, so they cannot say
+    when it has adapted); with any other split, start from its weights and pipeline
+    instead of fresh ones and train as usual (e.g. a model pretrained on synthetic clips).
+
+    Raises:
+        ValueError: `init` is another model or pipeline than this run's.
+    """
     t0 = time.perf_counter()
     check_augment(cfg)
+    calibrating = init is not None and parse_calibration(split) is not None
+    start = _init_checkpoint(init, model_name, pipeline_name) if init and not calibrating else None
     data = load_data(data_specs)
-    init_clf = load_init(init, split, model_name) if init is not None else None
+    init_clf = load_init(init, split, model_name) if init is not None and calibrating else None
     parts = split_clips(data.clips, split, WINDOW, data.uav_dir)
     train = parts.train
     repeats = 0
@@ -168,15 +175,27 @@ def train_model(
                 sources[key] = CaptureSource.from_parts(ps, WINDOW, cfg.stride, cfg.max_gap, rows)
     if on_start:
         on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
-    if init_clf is not None:
-        pipeline, model = init_clf.pipeline, init_clf.model
-        tune = replace(cfg, lr=cfg.lr * FINE_TUNE_LR)
-        history = fit(model, pipeline, fit_w, None, tune, on_epoch, None, sources["fit"], None)
+    if start is not None:
+        pipeline: Pipeline = start.pipeline  # fitted with the weights (paper: its scaling)
+    elif init_clf is not None:
+        pipeline = init_clf.pipeline
     else:
         pipeline = make_pipeline(pipeline_name or DEFAULT_PIPELINE[model_name])
         pipeline.fit(to_metric(fit_w.xyz, fit_w.aspect))
+
+    def initial_model() -> torch.nn.Module:
         torch.manual_seed(cfg.seed)  # the initial weights too: one seed, one model
         model = build_model(model_name, num_features=pipeline.num_features)
+        if start is not None:
+            model.load_state_dict(start.model.state_dict())
+        return model
+
+    if init_clf is not None:
+        model = init_clf.model
+        tune = replace(cfg, lr=cfg.lr * FINE_TUNE_LR)
+        history = fit(model, pipeline, fit_w, None, tune, on_epoch, None, sources["fit"], None)
+    else:
+        model = initial_model()
         history = fit(
             model, pipeline, fit_w, val_w, cfg, on_epoch, None, sources["fit"], sources["val"]
         )
@@ -188,8 +207,7 @@ def train_model(
         lrs = chosen_schedule(history, cfg.lr)
         if on_refit:
             on_refit(len(whole), len(lrs))
-        torch.manual_seed(cfg.seed)
-        model = build_model(model_name, num_features=pipeline.num_features)
+        model = initial_model()
         refit_history = fit_schedule(model, pipeline, whole, cfg, lrs, on_epoch, sources["whole"])
         refit_windows = len(whole)
     # Calibration on the validation tails, as the model meets them (capture and filter
@@ -217,3 +235,19 @@ def train_model(
     path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta, temperature)
     return TrainResult(path, history, len(fit_w), len(val_w), fit_w.skipped + val_w.skipped,
                        time.perf_counter() - t0, refit_history)  # fmt: skip
+
+
+def _init_checkpoint(
+    path: str | Path, model_name: str, pipeline_name: str | None
+) -> GestureClassifier:
+    """The checkpoint a run starts from, checked to be the same model and pipeline."""
+    start = GestureClassifier.load(path)
+    wanted = pipeline_name or DEFAULT_PIPELINE[model_name]
+    if start.model_name != model_name or start.pipeline.name != wanted:
+        raise ValueError(
+            f"{path}: --init is a {start.model_name} model with the {start.pipeline.name!r} "
+            f"pipeline, but this run trains {model_name} with {wanted!r}"
+        )
+    if start.window != WINDOW:
+        raise ValueError(f"{path}: --init has {start.window}-frame windows, not {WINDOW}")
+    return start
