@@ -26,3 +26,26 @@ def classifier(checkpoint: Path):
 
     torch.set_num_threads(1)
     return load_classifier(checkpoint)
+
+
+# Tests that pin an exact command script of the engine's mechanics (handover, arming
+# before commands, the operator lock) use this fixed model, so that retraining the
+# shipped model does not rewrite their scripts: trained without capture augmentation
+# (tests/data/README.md). The shipped model's own live figures are measured by
+# `proxima robustness` and the scenario tests.
+REFERENCE_CHECKPOINT = Path(__file__).resolve().parents[1] / "data" / "gesture-no-capture.pt"
+
+
+@pytest.fixture(scope="session")
+def reference_checkpoint() -> Path:
+    return REFERENCE_CHECKPOINT
+
+
+@pytest.fixture(scope="session")
+def reference_classifier():
+    import torch
+
+    from proxima.engine import load_classifier
+
+    torch.set_num_threads(1)
+    return load_classifier(REFERENCE_CHECKPOINT)

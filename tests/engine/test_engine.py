@@ -49,7 +49,10 @@ def paper_streams(laser_clips, tmp_path_factory) -> tuple[Path, Path, dict]:
     return folder / "front.csv", folder / "right.csv", streams["f"].truth()
 
 
-def test_secondary_takes_over_and_commands_the_main_drone(paper_streams, classifier) -> None:
+def test_secondary_takes_over_and_commands_the_main_drone(
+    paper_streams, reference_classifier
+) -> None:
+    classifier = reference_classifier  # an exact script: the fixed model (conftest)
     front, right, truth = paper_streams
     specs = [
         StreamSpec(name="x500", uri=f"replay:{front}"),

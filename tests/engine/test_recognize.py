@@ -49,8 +49,9 @@ def stitched(laser_clips, tmp_path_factory) -> tuple[Path, dict]:
 
 @pytest.mark.slow
 def test_commands_follow_the_script_and_never_come_before_arming(
-    stitched, checkpoint, tmp_path
+    stitched, reference_checkpoint, tmp_path
 ) -> None:
+    checkpoint = reference_checkpoint  # an exact script: the fixed model (conftest)
     csv, truth = stitched
     out = tmp_path / "events.jsonl"
     proc = recognize("--source", f"replay:{csv}", "--checkpoint", checkpoint, "--events", out)

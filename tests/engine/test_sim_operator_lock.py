@@ -17,7 +17,7 @@ fps = 30
 seed = 5
 [operator]
 heading_deg = 180.0
-script = "hover:4,have_command:4,move_to_left:4,wave_off:4"
+script = "hover:4,have_command:4,move_to_right:4,wave_off:4"
 [[bystanders]]            # signals commands of their own, 2.5 m to the operator's left
 behaviour = "gestures"
 north = 1.5
@@ -79,7 +79,7 @@ def test_commands_come_from_the_operator_only(tmp_path: Path, classifier) -> Non
     view = next(iter(s.views().values()))
     assert sum(p.pose is not None for p in view.people) == 3, view.people
     got = [c.command for c in commands if c.stream]
-    assert got == ["have_command", "move_to_left", "wave_off"], got
+    assert got == ["have_command", "move_to_right", "wave_off"], got
     assert engine.stats["cam"].error is None and len(poses) > 0.9 * s.frames
     assert not sure & {"move_upward", "land"}, sure  # the signaller's were never read
     # The signaller's gestures are read when a camera follows them: the same scene, a
