@@ -114,7 +114,7 @@ def test_every_supervisor_action_is_recorded(console: TestClient) -> None:
     assert "in progress" in entries[("training.start", "refused")]["detail"]["reason"]
     assert entries[("drone.stop", "ok")]["detail"]["log_id"]
     assert entries[("sample.keep", "ok")]["detail"] == {"drone": "main", "label": "hover"}
-    assert "not a gesture checkpoint" in entries[("model.promote", "refused")]["detail"]["reason"]
+    assert "not a readable checkpoint" in entries[("model.promote", "refused")]["detail"]["reason"]
     assert page["next_before_id"] is None
 
 

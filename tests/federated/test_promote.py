@@ -50,7 +50,13 @@ def test_promote_swaps_the_live_engine_classifier(tmp_path: Path, laser_dir: Pat
             bad = CliRunner().invoke(app, [*args, "--password", "wrong-password-1"])
             assert bad.exit_code == 2 and "login" in bad.output
             assert runtime.engine.pipelines["front"].classifier is before
-            ok = CliRunner().invoke(app, [*args, "--password", ADMIN[1]])
+            # a 2-round model is below the one in use: refused unless a reason is given
+            guarded = CliRunner().invoke(app, [*args, "--password", ADMIN[1]])
+            assert guarded.exit_code == 2 and "override reason" in guarded.output
+            assert runtime.engine.pipelines["front"].classifier is before
+            ok = CliRunner().invoke(
+                app, [*args, "--password", ADMIN[1], "--override-reason", "test run"]
+            )
             assert ok.exit_code == 0, ok.output
         after = runtime.engine.pipelines["front"].classifier
         assert after is not before

@@ -241,7 +241,8 @@ class StreamPipeline:
         self.frames += 1
         t = frame.t
         pose = self._operator_pose(frame)
-        self.last_pose = pose
+        # a replayed pose as received, so a recording replays through the same filter
+        self.last_pose = frame.pose if frame.pose is not None else pose
         if pose is None:
             return StreamUpdate(self.name, t, Sight.NONE)
         sight = operator_sight(pose)

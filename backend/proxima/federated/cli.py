@@ -273,6 +273,13 @@ def promote(
     ] = "",
     db: DbOpt = None,
     models_dir: Annotated[Path | None, typer.Option(help="The console's models folder.")] = None,
+    override_reason: Annotated[
+        str,
+        typer.Option(
+            help="Why to promote a model whose held-out figures are below the minimum or "
+            "the model in use's (the console refuses it otherwise; audited)."
+        ),
+    ] = "",
 ) -> None:
     """Put a run's global model into the live engine of a running console (an explicit
     supervisor action, through the console's API; nothing is promoted automatically)."""
@@ -298,7 +305,8 @@ def promote(
             if login.status_code != 200:
                 _fail(f"login to {url} as {user!r} failed: {login.status_code} {login.text}")
             token = login.json().get("token", "")
-            res = client.post(f"/api/models/{name}/promote",
+            body = {"override_reason": override_reason} if override_reason else None
+            res = client.post(f"/api/models/{name}/promote", json=body,
                               headers={"Authorization": f"Bearer {token}"})  # fmt: skip
     except httpx.HTTPError as exc:
         _fail(f"no console at {url}: {exc}")

@@ -237,7 +237,12 @@ def promote(
         raise HTTPException(
             status.HTTP_503_SERVICE_UNAVAILABLE, "no live engine runs in this server to promote to"
         )
-    comparison = _comparison(console, path)
+    try:
+        comparison = _comparison(console, path)
+    except HTTPException as exc:  # not a checkpoint the engine can run: a refusal too
+        audit(AuditAction.MODEL_PROMOTE, actor=user.username, target=name,
+              outcome=AuditOutcome.REFUSED, reason=str(exc.detail))  # fmt: skip
+        raise
     reason = (body.override_reason or "").strip() if body else ""
     if comparison["concerns"] and not reason:
         audit(
