@@ -5,6 +5,7 @@ it. It handles no signal itself: whatever ends it, the watchdog must end the res
 from __future__ import annotations
 
 import json
+import signal
 import sys
 import time
 from pathlib import Path
@@ -16,6 +17,10 @@ from proxima.federated.runner import FederatedRunner
 
 
 def main(work: Path) -> None:
+    # Default dispositions, whatever this was started under: a shell's background job
+    # inherits SIGINT ignored and nohup SIGHUP ignored, and neither would end it.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
     runner = FederatedRunner(work / "runs.db", work / "models", workdir=work / "fl",
                              drones=default_drones(2),
                              defaults=fast_config(rounds=50, min_clients=2))  # fmt: skip
