@@ -23,7 +23,6 @@ from proxima.types import Event
 # A model trained without capture augmentation, unsure on noisy input (tests/data/README.md).
 NO_CAPTURE = Path(__file__).resolve().parents[1] / "data" / "gesture-no-capture.pt"
 
-ONES = np.ones(13)
 Clips = dict[tuple[str, str], Clip]
 SHIPPED = EngineSettings().fusion_overrule_below  # agreement only
 
@@ -54,7 +53,7 @@ def evidence(
     xyz = clip.xyz[start : start + 60][None].astype(np.float32)
     probs = clf.predict(xyz)[0]
     vis = clip.visibility[start : start + 60]
-    return window_evidence(probs, vis, withheld, clf.labels, ONES, 0.5, False)
+    return window_evidence(probs, vis, withheld, clf.labels, 0.5, False)
 
 
 @pytest.mark.parametrize("overrule", [SHIPPED, 0.9, 1.0])
@@ -100,7 +99,7 @@ def test_a_stream_that_does_not_see_the_operator_contributes_nothing(
     hidden = left_clip.visibility[570:630].copy()
     hidden[:, ARMS] = 0.2  # the arms out of sight
     probs = clf.predict(left_clip.xyz[570:630][None].astype(np.float32))[0]
-    low = window_evidence(probs, hidden, (), clf.labels, ONES, 0.5, False)
+    low = window_evidence(probs, hidden, (), clf.labels, 0.5, False)
     assert low.weight == 0.0
     fused = fuse(("f", front), [("l", low)], 1.0)
     assert np.array_equal(fused.probs, front.probs) and list(fused.weights) == ["f"]

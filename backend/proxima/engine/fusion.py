@@ -2,16 +2,16 @@
 stream's decision; the priority arbiter still decides which stream drives.
 
 With `EngineSettings.fusion = "on"` each stream's classified window carries a
-`WindowEvidence` (`window_evidence`): its calibrated log-probabilities, log p / T per
-class, renormalised (T: the classifier's `temperature`, a number or one per label, 1
-when the checkpoint has none), and a weight, the mean visibility of the operator's arms
+`WindowEvidence` (`window_evidence`): its log-probabilities (the classifier's
+probabilities are calibrated by the classifier itself: `GestureClassifier` applies the
+checkpoint's temperature), and a weight, the mean visibility of the operator's arms
 (shoulders, elbows, wrists) over the window, 0 below `fusion_min_visibility`. In the
 decision path (`FusedDecisions`, between the time-ordered merge and the controller),
 each stream's window is fused with the newest window of every other stream that sees
 the operator, ended at most `fusion_max_age_s` before it and made by a classifier with
 the same labels:
 
-    fused = softmax(sum_i w_i * log_softmax(log p_i / T_i)),   w_i = weight_i / max_j weight_j
+    fused = softmax(sum_i w_i * log p_i),   w_i = weight_i / max_j weight_j
 
 (a product of experts, tempered by how well each camera sees the arms: agreeing views
 sharpen, a poorly seen one counts less). A window whose own top probability reaches
@@ -56,31 +56,14 @@ from proxima.types import Event
 ARMS = (11, 12, 13, 14, 15, 16)  # MediaPipe shoulders, elbows, wrists
 
 
-def temperature(classifier: object, labels: Sequence[str]) -> np.ndarray:
-    """The classifier's per-class temperature (its `temperature` attribute, a number or
-    one per label), 1 for every class when it has none or when its probabilities are
-    calibrated already (`applies_temperature`, as `GestureClassifier`'s are).
-
-    Raises:
-        ValueError: a temperature that is not positive or not one per label.
-    """
-    value = getattr(classifier, "temperature", None)
-    if value is None or getattr(classifier, "applies_temperature", False):
-        return np.ones(len(labels))
-    temp = np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1), (len(labels),))
-    if not np.all(temp > 0):
-        raise ValueError(f"the classifier's temperature must be > 0, got {value!r}")
-    return temp.copy()
-
-
 def arm_visibility(visibility: np.ndarray) -> float:
     """Mean visibility of the arms' landmarks over a window (`visibility` (W, 33))."""
     return float(np.mean(np.asarray(visibility)[:, ARMS]))
 
 
-def calibrated_log_probs(probs: np.ndarray, temp: np.ndarray) -> np.ndarray:
-    """log softmax(log p / T): the calibrated log-probabilities of one window."""
-    z = np.log(np.clip(np.asarray(probs, dtype=np.float64), 1e-12, 1.0)) / temp
+def log_probs(probs: np.ndarray) -> np.ndarray:
+    """The renormalised log-probabilities of one window (zeros clipped)."""
+    z = np.log(np.clip(np.asarray(probs, dtype=np.float64), 1e-12, 1.0))
     return z - _logsumexp(z)
 
 
@@ -89,17 +72,16 @@ def window_evidence(
     visibility: np.ndarray,
     withheld: Sequence[str],
     labels: Sequence[str],
-    temp: np.ndarray,
     min_visibility: float,
     restarted: bool,
 ) -> WindowEvidence:
     """One classified window (`probs` over `labels`, the window's `visibility` (W, 33))
-    as fusion reads it; see the module for the weight and the calibration."""
+    as fusion reads it; see the module for the weight."""
     seen = arm_visibility(visibility)
     return WindowEvidence(
         labels=tuple(labels),
         probs=np.asarray(probs, dtype=np.float64),
-        log_probs=calibrated_log_probs(probs, temp),
+        log_probs=log_probs(probs),
         weight=seen if seen >= min_visibility else 0.0,
         withheld=tuple(withheld),
         restarted=restarted,
@@ -138,9 +120,7 @@ def fuse(
         others = [(n, e) for n, e in others if _top(e) == _top(mine)]
     parts = [(n, e) for n, e in [own, *others] if e.weight > 0.0]
     if not parts or (len(parts) == 1 and parts[0][0] == name):
-        plain = calibrated_log_probs(mine.probs, np.ones(len(mine.labels)))
-        probs = mine.probs if np.allclose(mine.log_probs, plain) else np.exp(mine.log_probs)
-        return Fused(probs, mine.withheld, {name: mine.weight})
+        return Fused(mine.probs, mine.withheld, {name: mine.weight})
     top = max(e.weight for _, e in parts)
     labels = mine.labels
     thumbs = [labels.index(g) for g in THUMB_GESTURES if g in labels]

@@ -42,7 +42,7 @@ from proxima.control import (
     decision_filter,
 )
 from proxima.engine.config import EngineSettings, StreamSpec
-from proxima.engine.fusion import temperature, window_evidence
+from proxima.engine.fusion import window_evidence
 from proxima.engine.taps import StreamTaps
 from proxima.engine.window import PoseWindow
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
@@ -139,7 +139,6 @@ class StreamPipeline:
         self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
         self.filter = decision_filter(self.control, classifier.labels)
         self.evidence = HandEvidence.from_settings(self.control)
-        self._temperature = temperature(classifier, classifier.labels)
         self._restarted = True  # the filter was emptied since the last window (fusion)
         self.frames = 0
         self.classifications = 0
@@ -187,7 +186,6 @@ class StreamPipeline:
             self.window = PoseWindow(clf.window, self.settings.stride, self.settings.max_gap_s)
         self.filter = decision_filter(self.control, clf.labels)
         self._classifier = clf
-        self._temperature = temperature(clf, clf.labels)
         self._restarted = True
         swap.t = t
         swap.applied.set()
@@ -292,7 +290,7 @@ class StreamPipeline:
         fused = None
         if self.settings.fusion == "on":
             fused = window_evidence(
-                probs, vis[0], withheld, classifier.labels, self._temperature,
+                probs, vis[0], withheld, classifier.labels,
                 self.settings.fusion_min_visibility, self._restarted,
             )  # fmt: skip
         self._restarted = False

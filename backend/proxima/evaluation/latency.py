@@ -54,6 +54,25 @@ def build_streams(
     return out
 
 
+def describe_streams(
+    streams: Sequence[StitchedStream],
+    seeds: Sequence[int],
+    segments: int,
+    min_s: float,
+    max_s: float,
+) -> dict[str, Any]:
+    """The result files' record of a `build_streams` set of held-out streams."""
+    return {
+        "count": len(streams),
+        "seeds": [seeds[0], seeds[-1]],
+        "part": "test",
+        "segments_per_stream": segments,
+        "segment_s": [min_s, max_s],
+        "transition_s": 0.5,
+        "views": sorted({s.view for s in streams}),
+    }
+
+
 def recognize_all(
     streams: Sequence[StitchedStream],
     classifier: Classifier,
@@ -334,12 +353,7 @@ def measure(
     summary = total.summary()
     result.update(
         streams={
-            "count": len(streams),
-            "seeds": [seeds[0], seeds[-1]],
-            "part": "test",
-            "segments_per_stream": config.segments,
-            "segment_s": [config.min_s, config.max_s],
-            "transition_s": 0.5,
+            **describe_streams(streams, seeds, config.segments, config.min_s, config.max_s),
             "views": list(VIEWS),
             "fps": 30.0,
             "events_published": events,

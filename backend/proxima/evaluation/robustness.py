@@ -37,7 +37,7 @@ import numpy as np
 
 from proxima.control import ControlSettings
 from proxima.engine.config import EngineSettings
-from proxima.evaluation.latency import build_streams
+from proxima.evaluation.latency import build_streams, describe_streams
 from proxima.evaluation.metrics import accuracy_by, metrics
 from proxima.evaluation.replay import MemoClassifier, engine_run
 from proxima.evaluation.scoring import Score
@@ -310,13 +310,9 @@ def live_robustness(
         }
     out["field_condition"] = {"level": config.live_level, "capture": model.describe()}
     out["streams"] = {
-        "count": len(streams),
-        "seeds": [seeds[0], seeds[-1]],
-        "part": "test",
-        "segments_per_stream": config.live_segments,
-        "segment_s": [config.live_min_s, config.live_max_s],
-        "transition_s": 0.5,
-        "views": sorted({s.view for s in streams}),
+        **describe_streams(
+            streams, seeds, config.live_segments, config.live_min_s, config.live_max_s
+        ),
         "capture": "field: one draw per stream, applied to the whole stitched stream",
     }
     out["settings"] = {

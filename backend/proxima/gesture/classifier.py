@@ -74,10 +74,6 @@ def save_checkpoint(
 class GestureClassifier:
     """Classifies 60-frame windows of MediaPipe landmarks into the 13 gestures."""
 
-    # predict() divides the logits by `temperature` itself: its probabilities are
-    # calibrated already, so fusion must not temper them again.
-    applies_temperature = True
-
     def __init__(self, model: nn.Module, model_name: str, pipeline: Pipeline, window: int,
                  labels: tuple[str, ...], metadata: dict[str, Any],
                  temperature: float = 1.0) -> None:  # fmt: skip
