@@ -97,11 +97,11 @@ class FleetView:
 
         self.server = viser.ViserServer(host=self.host, port=self.port, verbose=False)
         self.port = self.server.get_port()
-        # No share button (it would offer a public tunnel) and a control panel that
-        # starts out of the way of the scene.
-        self.server.gui.configure_theme(
-            control_layout="collapsible", show_share_button=False, show_logo=False
-        )
+        # No share button (it would offer a public tunnel) and viser's control panel
+        # (a developer's: connection, camera, recording) minimised to its bar; the
+        # scene carries no controls of ours, the console has them.
+        self.server.gui.configure_theme(show_share_button=False, show_logo=False)
+        self.server.gui.main_panel.minimize()
         self._static_scene()
         self._sub = self.bus.subscribe(maxsize=2000, types=VIZ_TYPES)
         self._thread = threading.Thread(target=self._run, name="viz", daemon=True)
