@@ -11,7 +11,9 @@ unsmoothed (what `proxima evaluate` scores), clean smoothed, `field` level 1 and
 level 1 (captured per clip at 30 fps), through the engine's pipeline (offline replay,
 the engine's own code); the evidence rule tuned on tuning streams (seeds 0..) of both
 conditions, then the moving average (today's defaults) against it on the evaluation
-streams (seeds 1000..). Writes the JSON to --out.
+streams (seeds 1000..); `--by-command` adds per-command evidence thresholds tuned on
+the same tuning streams. Several checkpoints joined by commas score as their ensemble
+(`proxima.gesture.ensemble`). Writes the JSON to --out.
 """
 
 from __future__ import annotations
@@ -34,12 +36,14 @@ from proxima.evaluation.robust_training import (
     pool,
     recognitions,
     summary_row,
+    tune_by_command,
     tune_evidence,
     window_accuracy,
 )
 from proxima.gesture.capture import condition
 from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.datasets import load_data
+from proxima.gesture.ensemble import EnsembleClassifier
 from proxima.gesture.windows import WINDOW, split_clips
 
 CONDITIONS = {
@@ -61,9 +65,11 @@ def windows_cmd(args: argparse.Namespace) -> dict:
         name, _, rest = spec.partition("=")
         path, _, split = rest.partition(".pt:")  # splits have colons of their own
         path += ".pt"
-        clf = GestureClassifier.load(path)
+        paths = path.split(",")  # several: their ensemble
+        clf = GestureClassifier.load(path) if len(paths) == 1 else EnsembleClassifier.load(paths)
         test = split_clips(data.clips, split, WINDOW).test
-        row = {"checkpoint": path, "split": split, "temperature": clf.temperature}
+        temps = [GestureClassifier.load(p).temperature for p in paths]
+        row = {"checkpoint": path, "split": split, "temperature": temps}
         for key, (cond, level, smoothed) in CONDITIONS.items():
             row[key] = window_accuracy(clf, test, condition(cond, level), args.seed, smoothed)
         out[name] = row
@@ -73,7 +79,8 @@ def windows_cmd(args: argparse.Namespace) -> dict:
 
 def streams_cmd(args: argparse.Namespace) -> dict:
     clips = load_data(["laser"]).clips
-    clf = GestureClassifier.load(args.checkpoint)
+    paths = args.checkpoint.split(",")  # several: their ensemble (gesture/ensemble.py)
+    clf = GestureClassifier.load(paths[0]) if len(paths) == 1 else EnsembleClassifier.load(paths)
     settings = EngineSettings()
     conds = {"clean": condition("clean"), "field1": condition("field", 1)}
     tune_sets, eval_sets = {}, {}
@@ -97,11 +104,17 @@ def streams_cmd(args: argparse.Namespace) -> dict:
     log(f"evidence rule selected: {best}")
     keys = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
     params = {k: best[k] for k in keys}
-    rules = {
-        "average": ControlSettings(),
-        "evidence": ControlSettings(decision="evidence", **params),
-    }
+    evidence = ControlSettings(decision="evidence", **params)
+    rules = {"average": ControlSettings(), "evidence": evidence}
     result: dict = {"tuning": {"selected": best, "top": rows[:10], "configs": len(rows)}}
+    if args.by_command:
+        by_best, by_rows = tune_by_command(list(tune_sets.values()), evidence)
+        log(f"per-command thresholds selected: {by_best}")
+        table = by_best["evidence_threshold_by_command"]
+        rules["evidence_by_command"] = evidence.model_copy(
+            update={"evidence_threshold_by_command": table}
+        )
+        result["tuning_by_command"] = {"selected": by_best, "configs": len(by_rows)}
     for rule, control in rules.items():
         per = {}
         for key, (streams, recs) in eval_sets.items():
@@ -117,7 +130,7 @@ def streams_cmd(args: argparse.Namespace) -> dict:
         "segments": args.segments,
         "eval_hours": hours,
         "checkpoint": args.checkpoint,
-        "temperature": clf.temperature,
+        "temperature": [GestureClassifier.load(p).temperature for p in paths],
     }
     return result
 
@@ -126,16 +139,23 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     w = sub.add_parser("windows")
-    w.add_argument("--model", action="append", required=True, help="NAME=CKPT.pt:SPLIT")
+    w.add_argument(
+        "--model", action="append", required=True, help="NAME=CKPT.pt[,CKPT.pt...]:SPLIT"
+    )
     w.add_argument("--seed", type=int, default=0)
     w.add_argument("--out", type=Path, required=True)
     s = sub.add_parser("streams")
-    s.add_argument("--checkpoint", required=True)
+    s.add_argument("--checkpoint", required=True, help="CKPT, or CKPT,CKPT,... (an ensemble)")
     s.add_argument("--streams", type=int, default=12)
     s.add_argument("--tune-streams", type=int, default=6)
     s.add_argument("--segments", type=int, default=40)
     s.add_argument("--out", type=Path, required=True)
     s.add_argument("--cache", type=Path, help="pickle of the recognitions (made if absent)")
+    s.add_argument(
+        "--by-command",
+        action="store_true",
+        help="also tune per-command evidence thresholds on the tuning streams",
+    )
     args = ap.parse_args()
     torch.set_num_threads(1)
     t0 = time.perf_counter()

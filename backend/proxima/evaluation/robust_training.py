@@ -132,6 +132,44 @@ def tune_evidence(
     return rows[0], rows
 
 
+BY_COMMAND_FACTORS = (0.5, 0.75, 1.0, 1.5, 2.0, 3.0)
+
+
+def tune_by_command(
+    sets: Sequence[tuple[Sequence[StitchedStream], Sequence[Recognitions]]],
+    base: ControlSettings,
+    passes: int = 2,
+    factors: Sequence[float] = BY_COMMAND_FACTORS,
+) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """Per-command evidence thresholds on top of `base` (an evidence setting): for each
+    gesture in turn, its threshold times each of `factors`, the best by `rank`
+    on the pooled tuning sets kept before the next gesture; `passes` rounds. A command the
+    classifier confuses others with asks for more evidence, one it is slow to name for
+    less. Returns the best row (with `evidence_threshold_by_command`) and every row."""
+    by: dict[str, float] = dict(base.evidence_threshold_by_command)
+
+    def score(table: dict[str, float]) -> dict[str, Any]:
+        control = base.model_copy(update={"evidence_threshold_by_command": dict(table)})
+        return {"evidence_threshold_by_command": dict(table),
+                **pool([evaluate_config(s, r, control) for s, r in sets])}  # fmt: skip
+
+    best = score(by)
+    rows = [best]
+    for _ in range(passes):
+        for g in GESTURES:
+            current = by.get(g, base.evidence_threshold)
+            for f in factors:
+                if f == 1.0:
+                    continue
+                trial = {**by, g: round(current * f, 2)}
+                row = score(trial)
+                rows.append(row)
+                if rank(row) > rank(best):
+                    best, by = row, trial
+    rows.sort(key=rank, reverse=True)
+    return best, rows
+
+
 def pool(summaries: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Headline figures of several score summaries taken together (the worst p95, the
     summed counts), with `utility` for `rank`."""

@@ -1,0 +1,46 @@
+"""Several gesture classifiers as one: the mean of their calibrated probabilities.
+
+Members trained with different seeds make their confident mistakes on different windows
+(docs/experiments.md, "Ensembles under the field condition"), so the mean keeps the
+consistent evidence and damps a single member's blip. Each member is 0.2 MB and a window
+costs it well under a millisecond, small against the pose estimator's frame, so a few
+members fit the live path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from proxima.gesture.classifier import GestureClassifier
+
+
+class EnsembleClassifier:
+    """The mean of `members`' probabilities; members share window and labels."""
+
+    def __init__(self, members: Sequence[GestureClassifier]) -> None:
+        if not members:
+            raise ValueError("an ensemble needs at least one member")
+        first = members[0]
+        for m in members[1:]:
+            if m.window != first.window or tuple(m.labels) != tuple(first.labels):
+                raise ValueError(
+                    f"ensemble members disagree: window {m.window} / {first.window}, "
+                    f"labels {len(m.labels)} / {len(first.labels)}"
+                )
+        self.members = list(members)
+        self.window = first.window
+        self.labels = tuple(first.labels)
+        self.model_name = "+".join(m.model_name for m in members)
+
+    @classmethod
+    def load(cls, paths: Sequence[str | Path]) -> EnsembleClassifier:
+        """The ensemble of the checkpoints at `paths` (see `GestureClassifier.load`)."""
+        return cls([GestureClassifier.load(p) for p in paths])
+
+    def predict(self, xyz: np.ndarray, aspect: float | np.ndarray = 16 / 9) -> np.ndarray:
+        """Mean softmax probabilities (N, 13) of the members for windows (N, W, 33, 3)."""
+        probs = [m.predict(xyz, aspect) for m in self.members]
+        return np.mean(probs, axis=0)

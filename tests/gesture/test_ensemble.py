@@ -1,0 +1,40 @@
+"""The ensemble classifier on real LASER windows: the mean of its members' calibrated
+probabilities, usable wherever the engine takes a classifier."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from proxima.gesture.classifier import GestureClassifier
+from proxima.gesture.ensemble import EnsembleClassifier
+from proxima.types import GESTURES
+
+ROOT = Path(__file__).resolve().parents[2]
+MEMBERS = (
+    ROOT / "models" / "gesture-default.pt",
+    ROOT / "tests" / "data" / "gesture-no-capture.pt",
+)
+
+
+def test_the_ensemble_is_the_mean_of_its_members(laser_clips) -> None:
+    clip = next(c for c in laser_clips if c.gesture == "hover" and len(c) >= 80)
+    xyz = np.stack([clip.xyz[i : i + 60] for i in (0, 10, 20)])
+    members = [GestureClassifier.load(p) for p in MEMBERS]
+    ens = EnsembleClassifier(members)
+    probs = ens.predict(xyz, aspect=clip.aspect)
+    assert probs.shape == (3, len(GESTURES))
+    np.testing.assert_allclose(probs.sum(1), 1.0, atol=1e-5)
+    mean = np.mean([m.predict(xyz, aspect=clip.aspect) for m in members], axis=0)
+    np.testing.assert_allclose(probs, mean, atol=1e-6)
+    assert ens.window == 60 and ens.labels == tuple(GESTURES)
+    assert EnsembleClassifier.load(MEMBERS).predict(xyz, clip.aspect).shape == (3, 13)
+
+
+def test_members_must_agree_on_the_window() -> None:
+    a, b = (GestureClassifier.load(p) for p in MEMBERS)
+    b.window = 30
+    with pytest.raises(ValueError, match="window 30 / 60"):
+        EnsembleClassifier([a, b])
+    with pytest.raises(ValueError, match="at least one"):
+        EnsembleClassifier([])
