@@ -36,13 +36,27 @@ def _store(db_path: Path, laser_clips, frames: int = 240) -> list[int]:  # type:
             clip = next(c for c in laser_clips if c.gesture == g and c.view == "l")
             part = clip.slice(30, 30 + frames)
             times = 100.0 + (part.frames - part.frames[0]) / 30.0
-            s = add_sample(db, stream="left", drone="second", xyz=part.xyz,
-                           visibility=part.visibility, times=times, created_by="t")  # fmt: skip
+            s = add_sample(
+                db,
+                stream="left",
+                drone="second",
+                xyz=part.xyz,
+                visibility=part.visibility,
+                times=times,
+                created_by="t",
+            )
             if k < 2:
                 review_sample(db, s, status="kept", label=g, by="t")
             ids.append(s.id)
-        gone = add_sample(db, stream="left", drone="second", xyz=part.xyz[:80],
-                          visibility=part.visibility[:80], times=times[:80], label="land")  # fmt: skip
+        gone = add_sample(
+            db,
+            stream="left",
+            drone="second",
+            xyz=part.xyz[:80],
+            visibility=part.visibility[:80],
+            times=times[:80],
+            label="land",
+        )
         review_sample(db, gone, status="deleted", label=None, by="t")
     engine.dispose()
     return ids
@@ -72,8 +86,9 @@ def test_kept_samples_load_as_console_clips(tmp_path: Path, laser_clips) -> None
 
 
 def test_frame_numbers_follow_the_stream_clock() -> None:
-    np.testing.assert_array_equal(frame_numbers(np.array([5.0, 5.0333, 5.1334, 5.1667])),
-                                  [1, 2, 5, 6])  # fmt: skip
+    np.testing.assert_array_equal(
+        frame_numbers(np.array([5.0, 5.0333, 5.1334, 5.1667])), [1, 2, 5, 6]
+    )
     # a faster stream's rows never share a number
     assert list(frame_numbers(np.arange(6) / 60.0)) == [1, 2, 3, 4, 5, 6]
 
@@ -84,15 +99,39 @@ def test_train_and_evaluate_read_console_samples(tmp_path: Path, laser_clips) ->
     _store(db, laser_clips)
     runner = CliRunner()
     out = tmp_path / "metrics.json"
-    r = runner.invoke(app, ["evaluate", "--checkpoint", str(default_checkpoint()),
-                            "--data", f"samples:{db}", "--json", str(out)])  # fmt: skip
+    r = runner.invoke(
+        app,
+        [
+            "evaluate",
+            "--checkpoint",
+            str(default_checkpoint()),
+            "--data",
+            f"samples:{db}",
+            "--json",
+            str(out),
+        ],
+    )
     assert r.exit_code == 0, r.output
     metrics = json.loads(out.read_text())
     assert metrics["clips"] == 2 and metrics["windows"] > 0
     assert set(metrics["per_view"]) == {"left"}
     ckpt = tmp_path / "m.pt"
-    r = runner.invoke(app, ["train", "--data", f"samples:{db}", "--out", str(ckpt),
-                            "--epochs", "1", "--stride", "8", "--threads", "1"])  # fmt: skip
+    r = runner.invoke(
+        app,
+        [
+            "train",
+            "--data",
+            f"samples:{db}",
+            "--out",
+            str(ckpt),
+            "--epochs",
+            "1",
+            "--stride",
+            "8",
+            "--threads",
+            "1",
+        ],
+    )
     assert r.exit_code == 0, r.output
     meta = GestureClassifier.load(ckpt).metadata
     assert meta["data"] == [str(db)] and meta["train_windows"] > 0
@@ -109,11 +148,19 @@ def test_take_split_leaves_a_window_between_training_and_held_out(laser_clips) -
 
 @pytest.mark.slow
 def test_calibrating_on_takes_scores_before_and_after(tmp_path: Path, laser_clips) -> None:  # type: ignore[no-untyped-def]
-    takes = [next(c for c in laser_clips if c.gesture == g and c.view == "r").slice(20, 230)
-             for g in GESTURES]  # fmt: skip
+    takes = [
+        next(c for c in laser_clips if c.gesture == g and c.view == "r").slice(20, 230)
+        for g in GESTURES
+    ]
     seen: list[int] = []
-    res = calibrate_takes(default_checkpoint(), takes, tmp_path / "cal.pt", epochs=2, threads=1,
-                          on_epoch=lambda e, n, loss: seen.append(e))  # fmt: skip
+    res = calibrate_takes(
+        default_checkpoint(),
+        takes,
+        tmp_path / "cal.pt",
+        epochs=2,
+        threads=1,
+        on_epoch=lambda e, n, loss: seen.append(e),
+    )
     assert seen == [1, 2] and res.epochs == 2
     assert set(res.before["per_gesture"]) == set(res.after["per_gesture"]) == set(GESTURES)
     assert res.before["windows"] == res.after["windows"] > 0
