@@ -26,8 +26,8 @@ from proxima.gesture.take_calibration import MAX_EPOCHS, MIN_TAKE_FRAMES
 from proxima.settings import MIN_PASSWORD_LENGTH, WELL_KNOWN_PASSWORDS, check_password_strength
 from proxima.types import GESTURES
 
-# A calibration take: 7 s at 30 fps, of which the last 63 frames are held out.
-DEFAULT_TAKE_FRAMES = 210
+# A calibration take: 10 s at 30 fps, of which the last 90 frames are held out.
+DEFAULT_TAKE_FRAMES = 300
 
 # One of the 13 gestures, as an enum in the schema.
 GestureName = Literal[GESTURES]  # type: ignore[valid-type]

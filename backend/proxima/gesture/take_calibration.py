@@ -29,7 +29,7 @@ from proxima.types import GESTURES
 
 HOLDOUT_FRACTION = 0.3
 MIN_TAKE_FRAMES = 3 * WINDOW  # training >= 1 window, a window of gap, held out >= 1 window
-TRAIN_STRIDE = 2  # takes are short: every other start trains
+TRAIN_STRIDE = 3  # takes are short: most starts train
 EVAL_STRIDE = 2
 MAX_EPOCHS = 40
 
