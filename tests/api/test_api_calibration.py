@@ -11,10 +11,14 @@ from pathlib import Path
 import httpx
 import numpy as np
 import pytest
-from api_helpers import ADMIN, Api, laser_clip
+from api_helpers import ADMIN, Api, laser_clip, login, make_settings
+from fastapi.testclient import TestClient
 
+from proxima.api import create_app
+from proxima.api.feed import ReplayPoseFeed
 from proxima.api.runtime import build_runtime
 from proxima.api.server import BackgroundServer
+from proxima.events import EventBus
 from proxima.ingest import read_landmark_csv
 from proxima.ingest.landmark_csv import write_landmark_csv
 from proxima.settings import Settings
@@ -155,6 +159,11 @@ def test_calibrate_a_stream_and_promote_for_it_only(tmp_path: Path, checkpoint_p
             audit = get("/audit?action=model.promote_stream").json()["entries"]
             assert audit[0]["target"] == s["candidate"] and audit[0]["detail"]["stream"] == "front"
             assert get(f"/calibration/{sid}").json()["state"] == "promoted"
+            # The demo's engine restart keeps the stream's own model (and the others' common one).
+            engine = runtime.restart_engine()
+            split = lambda name: engine.pipelines[name].classifier.metadata.get("split")  # noqa: E731
+            _wait(lambda: split("front"), lambda v: v == "console-calibration", 15, "front's model")
+            assert split("left") != "console-calibration"
     finally:
         runtime.close()
 
@@ -214,3 +223,49 @@ def test_calibration_refusals(api: Api) -> None:
     assert r.status_code == 409 and "train the calibration first" in r.json()["detail"]
     assert c.get("/api/calibration/nope", headers=h).status_code == 404
     assert [x["id"] for x in c.get("/api/calibration", headers=api.viewer).json()] == [sid]
+
+
+@pytest.mark.slow
+def test_a_training_failure_is_shown_and_keeps_the_takes(tmp_path: Path) -> None:
+    blocker = tmp_path / "models"
+    blocker.write_text("a file where the models folder should be")
+    settings = make_settings(
+        tmp_path,
+        server={
+            "db_path": str(tmp_path / "c.db"),
+            "viser_enabled": False,
+            "models_dir": str(blocker),
+        },
+    )
+    bus = EventBus()
+    app = create_app(settings, bus)
+    with TestClient(app) as c, ReplayPoseFeed(bus, {"front": settings.stream("front").uri}):
+        h = login(c, ADMIN)
+        s = c.post(
+            "/api/calibration",
+            headers=h,
+            json={
+                "stream": "front",
+                "gestures": ["hover"],
+                "frames": 180,
+                "countdown_s": 0,
+                "epochs": 1,
+            },
+        ).json()
+        assert (
+            c.post(
+                f"/api/calibration/{s['id']}/takes", headers=h, json={"gesture": "hover"}
+            ).status_code
+            == 202
+        )
+        get = lambda: c.get(f"/api/calibration/{s['id']}", headers=h).json()  # noqa: E731
+        body = _wait(get, lambda b: b["takes"][0]["state"] != "recording", 20, "the take")
+        assert body["takes"][0]["state"] == "done", body
+        assert body["takes"][0]["reading"]["gesture"] == "hover"  # the shipped model's reading
+        assert c.post(f"/api/calibration/{s['id']}/train", headers=h).status_code == 202
+        body = _wait(get, lambda b: b["state"] != "training", 60, "training")
+        assert body["state"] == "failed" and str(blocker) in body["detail"], body
+        with app.state.console.sessions() as db:
+            assert [k.label for k in kept_samples(db, "main")] == ["hover"]
+        # the page may train again once the cause is fixed: the session still holds the take
+        assert body["done"] == 1 and body["takes"][0]["sample_id"] is not None

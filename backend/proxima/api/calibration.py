@@ -92,6 +92,7 @@ class CalibrationManager:
         self.console = console
         self._lock = threading.Lock()
         self._train_lock = threading.Lock()  # one fine-tuning at a time (shared cores)
+        self._refresh_lock = threading.Lock()
         self._sessions: dict[str, CalibrationSession] = {}
         self._threads: list[threading.Thread] = []
 
@@ -175,11 +176,15 @@ class CalibrationManager:
             label=gesture,
         )
         take.state, take.recording, take.detail = "recording", rec.id, ""
-        if session.state in ("trained", "failed"):  # a new take: train again
+        if session.state in ("trained", "failed", "promoted"):  # a new take: train again
             session.state, session.detail = "recording", ""
         return take
 
     def _refresh(self, session: CalibrationSession) -> None:
+        with self._refresh_lock:  # two pages polling must not take one recording twice
+            self._refresh_takes(session)
+
+    def _refresh_takes(self, session: CalibrationSession) -> None:
         for take in session.takes.values():
             if take.state != "recording" or take.recording is None:
                 continue
