@@ -54,7 +54,7 @@ def _wait(get, pred, timeout: float, what: str) -> dict:  # type: ignore[no-unty
 
 @pytest.mark.slow
 def test_calibrate_a_stream_and_promote_for_it_only(tmp_path: Path, checkpoint_path: Path) -> None:
-    replay = long_replay(tmp_path / "front.csv", ["move_downward_f", "hover_f"])
+    replay = long_replay(tmp_path / "front.csv", ["move_downward_f", "hover_f", "all_clear_f"])
     models = tmp_path / "models"
     settings = Settings.load(
         config=None,

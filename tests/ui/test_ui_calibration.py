@@ -33,7 +33,7 @@ def long_replay(path: Path, names: list[str]) -> Path:
 
 
 def test_calibrate_a_camera_and_promote_for_it(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    replay = long_replay(tmp_path / "front.csv", ["move_downward_f", "hover_f"])
+    replay = long_replay(tmp_path / "front.csv", ["move_downward_f", "hover_f", "all_clear_f"])
     models = tmp_path / "models"
     console = start_console(
         tmp_path,
