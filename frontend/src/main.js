@@ -7,9 +7,10 @@ import { setupAlarms } from "./alarms.js";
 import * as live from "./pages/live.js";
 import * as training from "./pages/training.js";
 import * as labelling from "./pages/labelling.js";
+import * as calibration from "./pages/calibration.js";
 import * as viz from "./pages/viz.js";
 
-const pages = { live, training, labelling, "3d": viz };
+const pages = { live, training, labelling, calibration, "3d": viz };
 let current = null;
 const $ = (sel) => document.querySelector(sel);
 

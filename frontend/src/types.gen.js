@@ -64,6 +64,17 @@ export const MESSAGE_TYPES = Object.freeze([
  */
 
 /**
+ * A calibration of one stream's camera: a take of each gesture (default: all 13),
+ * `frames` poses each after a `countdown_s`, then `epochs` of fine-tuning.
+ * @typedef {object} CalibrationRequest
+ * @property {string} stream
+ * @property {("all_clear" | "have_command" | "hover" | "land" | "land_direction" | "move_ahead" | "move_downward" | "move_to_left" | "move_to_right" | "move_upward" | "not_clear" | "slow_down" | "wave_off")[] | null} [gestures]
+ * @property {number} [frames]
+ * @property {number} [countdown_s]
+ * @property {number} [epochs]
+ */
+
+/**
  * A command decided for a drone. `command` is the gesture it came from; `stream` is
  * the stream that saw the gesture, `drone` the drone it goes to.
  * @typedef {object} CommandEvent
@@ -379,6 +390,11 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {boolean} driving
  * @property {StreamLive} live
  * @property {string} handover_reason
+ */
+
+/**
+ * @typedef {object} TakeRequest
+ * @property {"all_clear" | "have_command" | "hover" | "land" | "land_direction" | "move_ahead" | "move_downward" | "move_to_left" | "move_to_right" | "move_upward" | "not_clear" | "slow_down" | "wave_off"} gesture
  */
 
 /**

@@ -30,6 +30,7 @@ from proxima.api.recorder import SampleRecorder
 from proxima.api.routers import (
     audit,
     auth,
+    calibration,
     commands,
     config,
     drones,
@@ -60,6 +61,7 @@ ROUTERS = (
     drones.router,
     commands.router,
     samples.router,
+    calibration.router,
     training.router,
     models.router,
     audit.router,

@@ -8,6 +8,7 @@ success.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any, Protocol, runtime_checkable
 
 from proxima.federated.config import FLConfig
@@ -85,13 +86,16 @@ class EmergencyStop(Protocol):
 class ModelPromoter(Protocol):
     """Puts a checkpoint into the live engine (an explicit action, never automatic)."""
 
-    def promote(self, checkpoint_path: str) -> dict[str, Any]:
-        """Load the checkpoint into every stream's classifier; returns what was loaded
-        (`streams`, `window`, and `pending`: streams that have not switched yet).
+    def promote(self, checkpoint_path: str, streams: Sequence[str] | None = None) -> dict[str, Any]:
+        """Load the checkpoint into every stream's classifier (or `streams`' only);
+        returns what was loaded (`streams`, `window`, and `pending`: streams that have
+        not switched yet).
 
         Raises:
-            ValueError: the file is not a usable checkpoint.
+            ValueError: the file is not a usable checkpoint, or an unknown stream.
         """
         ...
 
-    def active_checkpoint(self) -> str | None: ...
+    def active_checkpoint(self, stream: str | None = None) -> str | None:
+        """The model `stream` runs, else the one promoted for every stream."""
+        ...

@@ -92,9 +92,11 @@ class ConsoleRuntime:
                     reason="engine restarted: have_command again",
                 )
             )
-        engine = start_engine(
-            self.settings, self.bus, self.realtime, old.classifier(old.specs[0].name)
-        )
+        # The common model from a stream without one of its own (the promoter puts the
+        # streams' own models back when it attaches).
+        own = self.promoter.stream_checkpoints() if self.promoter is not None else {}
+        common = next((sp.name for sp in old.specs if sp.name not in own), old.specs[0].name)
+        engine = start_engine(self.settings, self.bus, self.realtime, old.classifier(common))
         self.engine = engine
         if self.promoter is not None:
             self.promoter.attach(engine)
@@ -218,12 +220,16 @@ def build_runtime(
             from proxima.api.promote import EnginePromoter
 
             rt.promoter = EnginePromoter(rt.engine, settings.engine.checkpoint)
-            from proxima.api.promote import restore_promoted
+            from proxima.api.promote import restore_promoted, restore_stream_models
             from proxima.store.audit import AuditLog
 
             restored = restore_promoted(rt.promoter, AuditLog(db), settings.server.models_dir)
             if restored:
                 rt.notes.append(f"live engine runs {restored}, promoted before the restart")
+            for item in restore_stream_models(
+                rt.promoter, AuditLog(db), settings.server.models_dir
+            ):
+                rt.notes.append(f"stream {item}, promoted for it before the restart")
         except Exception as exc:
             rt.notes.append(f"live engine not started: {type(exc).__name__}: {exc}")
     elif not settings.streams:

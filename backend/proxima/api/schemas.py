@@ -22,8 +22,12 @@ from proxima.federated.config import (
     Rounds,
     Strategy,
 )
+from proxima.gesture.take_calibration import MAX_EPOCHS, MIN_TAKE_FRAMES
 from proxima.settings import MIN_PASSWORD_LENGTH, WELL_KNOWN_PASSWORDS, check_password_strength
 from proxima.types import GESTURES
+
+# A calibration take: 10 s at 30 fps, of which the last 90 frames are held out.
+DEFAULT_TAKE_FRAMES = 300
 
 # One of the 13 gestures, as an enum in the schema.
 GestureName = Literal[GESTURES]  # type: ignore[valid-type]
@@ -205,6 +209,21 @@ class TrainingStart(_In):
 
 # The form's fields, in the order the Training page shows them.
 TRAINING_FORM: tuple[str, ...] = tuple(TrainingStart.model_fields)
+
+
+class CalibrationRequest(_In):
+    """A calibration of one stream's camera: a take of each gesture (default: all 13),
+    `frames` poses each after a `countdown_s`, then `epochs` of fine-tuning."""
+
+    stream: str
+    gestures: list[GestureName] | None = Field(None, min_length=1, max_length=len(GESTURES))
+    frames: int = Field(DEFAULT_TAKE_FRAMES, ge=MIN_TAKE_FRAMES, le=MAX_FRAMES)
+    countdown_s: float = Field(3.0, ge=0, le=MAX_COUNTDOWN_S)
+    epochs: int = Field(8, ge=1, le=MAX_EPOCHS)
+
+
+class TakeRequest(_In):
+    gesture: GestureName
 
 
 class PromoteRequest(_In):

@@ -52,3 +52,10 @@ class Console:
         from proxima.api.model_eval import ModelEvaluator
 
         return ModelEvaluator(self.settings.server.db_path.parent / "console-eval")
+
+    @cached_property
+    def calibration(self) -> Any:
+        """Guided calibration sessions (proxima.api.calibration)."""
+        from proxima.api.calibration import CalibrationManager
+
+        return CalibrationManager(self)

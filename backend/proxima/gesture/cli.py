@@ -14,7 +14,8 @@ DataOpt = Annotated[
     list[str] | None,
     typer.Option(
         "--data",
-        help="Data folder (LASER CSVs or UAV-Gesture), or the name laser / uav-gesture; "
+        help="Data folder (LASER CSVs or UAV-Gesture), the name laser / uav-gesture, "
+        "synth:DIR, or samples:DB (the console's kept samples in its database DB); "
         "repeat to combine. Default: $PROXIMA_DATA, ../shared, the cache, or a download.",
     ),
 ]

@@ -132,20 +132,26 @@ def download_dataset(name: str, dest: Path | None = None, base_url: str | None =
 
 
 SYNTH_PREFIX = "synth:"
+SAMPLES_PREFIX = "samples:"  # the console's kept samples (console_samples.py)
 
 
 def resolve_dataset(spec: str | Path | None = None) -> Path:
     """A data folder from `--data` (a path, the names `laser` / `uav-gesture`, or
     `synth:DIR` for a synthetic data set made by `proxima synth`), else `PROXIMA_DATA`,
-    else the LASER set in ../shared, else the cache, else a download.
+    else the LASER set in ../shared, else the cache, else a download. `samples:DB`
+    gives the console database file DB (its kept samples, console_samples.py).
 
     Raises:
         DataError: an explicit path that does not exist, a `synth:` folder that holds no
-            synthetic data set, a failed download, or no copy found while
-            `PROXIMA_OFFLINE` forbids the download.
+            synthetic data set, a `samples:` file that does not exist, a failed download,
+            or no copy found while `PROXIMA_OFFLINE` forbids the download.
     """
     spec = spec or os.environ.get("PROXIMA_DATA") or "laser"
     name = str(spec)
+    if name.startswith(SAMPLES_PREFIX):
+        from proxima.gesture.console_samples import resolve_samples_db
+
+        return resolve_samples_db(name)
     if name.startswith(SYNTH_PREFIX):
         from proxima.synth.dataset import MANIFEST, is_synth_dir
 

@@ -7,7 +7,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from proxima.gesture.clip import Clip, DataError
-from proxima.gesture.data_source import resolve_dataset, sha256
+from proxima.gesture.console_samples import load_console_samples
+from proxima.gesture.data_source import SAMPLES_PREFIX, resolve_dataset, sha256
 from proxima.gesture.laser import load_laser_dir
 from proxima.gesture.uavgesture import is_uavgesture_dir, load_uavgesture_dir
 
@@ -24,6 +25,9 @@ class LoadedData:
 
         h = hashlib.sha256()
         for folder in self.folders:
+            if folder.is_file():  # a console database (samples:DB)
+                h.update(f"{folder.name}:{sha256(folder)}\n".encode())
+                continue
             for f in sorted(folder.rglob("*")):
                 if f.is_file() and f.suffix in (".csv", ".mat", ".txt", ".json"):
                     h.update(f"{f.relative_to(folder)}:{sha256(f)}\n".encode())
@@ -33,7 +37,8 @@ class LoadedData:
 def load_data(specs: Sequence[str | Path] | None = None) -> LoadedData:
     """Resolve and load every `--data` folder (default: the LASER set). A synthetic data
     set (`synth:DIR`, or any folder with the manifest of `proxima synth`) loads as
-    source `synth`, whose clips every split keeps for training only (windows.py).
+    source `synth`, whose clips every split keeps for training only (windows.py);
+    `samples:DB` loads the console's kept samples as source `console`.
 
     Raises:
         DataError: a folder that is neither a LASER, a UAV-Gesture nor a synthetic data
@@ -48,7 +53,9 @@ def load_data(specs: Sequence[str | Path] | None = None) -> LoadedData:
     for spec in chosen:
         folder = resolve_dataset(spec)
         folders.append(folder)
-        if is_uavgesture_dir(folder):
+        if str(spec).startswith(SAMPLES_PREFIX):
+            clips += load_console_samples(folder)
+        elif is_uavgesture_dir(folder):
             uav_dir = folder
             clips += load_uavgesture_dir(folder)
         elif is_synth_dir(folder):  # before LASER: its CSVs are in the LASER format

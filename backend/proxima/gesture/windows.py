@@ -26,7 +26,8 @@ TRAIN_ONLY_SOURCES = frozenset({"synth"})
 # Frames a second of each source's recordings, for splits that count in seconds. LASER:
 # 30 fps. UAV-Gesture: 25 fps, the frame rate of its 1920x1080 videos in the data set's
 # paper (Perera et al. 2018); the joint files themselves carry no rate. Synthetic: 30.
-SOURCE_FPS = {"laser": 30.0, "uav-gesture": 25.0, "synth": 30.0}
+# Console samples: numbered on a 30 fps clock from their stream times (console_samples.py).
+SOURCE_FPS = {"laser": 30.0, "uav-gesture": 25.0, "synth": 30.0, "console": 30.0}
 CALIBRATE = "calibrate"
 # Inner splits a calibration can follow: those that hold out whole clips of a new view
 # or new people (the temporal split's test parts are tails of seen clips).

@@ -38,6 +38,8 @@ class AuditAction(StrEnum):
     DRONE_RESUME = "drone.resume"
     MODEL_PROMOTE = "model.promote"
     MODEL_ROLLBACK = "model.rollback"
+    MODEL_PROMOTE_STREAM = "model.promote_stream"  # for one stream (a calibration)
+    CALIBRATION_TRAIN = "calibration.train"
     RUN_START = "training.start"
     RUN_CANCEL = "training.cancel"
     RECORDING_START = "sample.record"

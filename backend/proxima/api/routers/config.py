@@ -12,7 +12,7 @@ from proxima.api.auth import VIEW_PATH
 from proxima.api.deps import ConsoleDep, CurrentUser
 from proxima.api.interfaces import TrainingRunner
 from proxima.api.openapi import openapi_schema
-from proxima.api.schemas import TRAINING_FORM, RecordingRequest
+from proxima.api.schemas import TRAINING_FORM, CalibrationRequest, RecordingRequest
 from proxima.federated.config import FLConfig
 from proxima.types import GESTURES
 
@@ -36,13 +36,17 @@ def _training_form(runner: TrainingRunner | None) -> dict[str, dict[str, Any]]:
     return form
 
 
-def _recording_form() -> dict[str, dict[str, Any]]:
-    """The Labelling page's numeric fields with the bounds `RecordingRequest` checks (one
-    definition: the request schema's own JSON schema)."""
-    props = RecordingRequest.model_json_schema()["properties"]
+def _form(schema: Any, names: tuple[str, ...]) -> dict[str, dict[str, Any]]:
+    """Numeric fields with the bounds a request schema checks (one definition: the
+    schema's own JSON schema)."""
+    props = schema.model_json_schema()["properties"]
     keep = ("type", "minimum", "maximum", "default")
-    return {name: {k: props[name][k] for k in keep if k in props[name]}
-            for name in ("frames", "countdown_s")}  # fmt: skip
+    return {name: {k: props[name][k] for k in keep if k in props[name]} for name in names}
+
+
+def _recording_form() -> dict[str, dict[str, Any]]:
+    """The Labelling page's numeric fields with the bounds `RecordingRequest` checks."""
+    return _form(RecordingRequest, ("frames", "countdown_s"))
 
 
 @router.get("/config")
@@ -61,6 +65,8 @@ def get_config(user: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
         "training_available": console.training is not None,
         "training_form": _training_form(console.training),
         "recording_form": _recording_form(),
+        # The Calibration page's fields, with the bounds `CalibrationRequest` checks.
+        "calibration_form": _form(CalibrationRequest, ("frames", "countdown_s", "epochs")),
         "estop_available": console.estop is not None,
     }
 

@@ -140,6 +140,11 @@ def active_model(_: CurrentUser, console: ConsoleDep) -> dict[str, Any]:
         "by": last["by"] if last else "",
         "action": last["action"] if last else "configured",
         "rollback_to": last["previous"] if last else "",
+        # Streams that run a model of their own (promoted for them: a calibration).
+        "streams": {
+            stream: _name(console, p)
+            for stream, p in getattr(console.promoter, "stream_checkpoints", dict)().items()
+        },
     }
 
 

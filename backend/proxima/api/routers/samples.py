@@ -122,49 +122,16 @@ def review(
     return _out(s)
 
 
-_classifiers: dict[str, Any] = {}
-
-
-def _classifier(console: Any) -> Any:
-    """The model in use (the live engine's), else the shipped one; loaded once each."""
-    from proxima.gesture.classifier import GestureClassifier, default_checkpoint
-
-    active = console.promoter.active_checkpoint() if console.promoter else None
-    path = str(active or default_checkpoint())
-    if path not in _classifiers:
-        _classifiers[path] = GestureClassifier.load(path)
-    return _classifiers[path], path
-
-
 @router.get("/{sample_id:int}/reading", responses=errors(404))
 def reading(sample_id: int, _: CurrentUser, db: DbDep, console: ConsoleDep) -> dict[str, Any]:
     """What the model in use (else the shipped one) reads in the sample: the mean of its
     probabilities over the sample's windows (a sample shorter than the model's window is
     padded with its first frame), the top gesture and each gesture's probability, so the
     console can warn when it disagrees with the label chosen."""
-    import numpy as np
-
+    from proxima.api.reading import model_in_use, model_reading
     from proxima.api.routers.models import _name
 
     s = _sample(db, sample_id)
-    arr = s.arrays()
-    clf, path = _classifier(console)
-    xyz = np.asarray(arr.xyz, np.float32)
-    n, w = len(xyz), clf.window
-    padded = n < w
-    if padded:
-        xyz = np.concatenate([np.repeat(xyz[:1], w - n, axis=0), xyz])
-    starts = range(0, len(xyz) - w + 1, max(1, w // 4))
-    windows = np.stack([xyz[i : i + w] for i in starts])
-    probs = clf.predict(windows).mean(axis=0)
-    top = int(probs.argmax())
-    return {
-        "sample": sample_id,
-        "model": _name(console, path),
-        "gesture": clf.labels[top],
-        "confidence": round(float(probs[top]), 4),
-        "probs": {g: round(float(p), 4) for g, p in zip(clf.labels, probs, strict=True)},
-        "frames": n,
-        "window": w,
-        "padded": padded,
-    }
+    clf, path = model_in_use(console)
+    return {"sample": sample_id, "model": _name(console, path),
+            **model_reading(clf, s.arrays().xyz)}  # fmt: skip
