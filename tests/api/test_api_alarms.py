@@ -53,3 +53,27 @@ def test_battery_and_failsafe_alarms(api: Api, caplog: pytest.LogCaptureFixture)
     with api.client.websocket_connect("/api/ws", subprotocols=["proxima", token]) as ws:
         hello = ws.receive_json()
     assert [a["kind"] for a in hello["alarms"]][:2] == ["failsafe_landing", "battery_low"]
+
+
+def test_geofence_alarms_follow_the_drones_position(api: Api) -> None:
+    alarms: list[DroneAlarmEvent] = []
+    api.bus.add_listener(lambda e: alarms.append(e) if isinstance(e, DroneAlarmEvent) else None)
+
+    def at(north: float, down: float) -> None:
+        api.bus.publish(DroneStateEvent(t=0.0, stream="main", drone="main", link="ok",
+                                        position=[north, 0.0, down], battery_pct=90.0))  # fmt: skip
+
+    # The default fence: 30 m around home, 20 m ceiling; a warning beyond 90 % of either.
+    for north, down in ((5, -5), (26, -5), (28, -5), (29, -5), (31, -5), (32, -5), (10, -5),
+                        (0, -19)):  # fmt: skip
+        at(north, down)
+    assert [(a.kind, a.severity, a.active) for a in alarms] == [
+        ("geofence", "warning", True),
+        ("geofence", "critical", True),
+        ("geofence", "warning", False),
+        ("geofence", "warning", True),
+    ]
+    assert "near the geofence, 28.0 m from home (fence radius 30 m)" in alarms[0].message
+    assert "outside the geofence, 31.0 m from home" in alarms[1].message
+    assert "back inside" in alarms[2].message
+    assert "19.0 m up (ceiling 20 m)" in alarms[3].message

@@ -42,6 +42,13 @@ def test_start_a_run_and_see_curve_points(page, tmp_path: Path) -> None:  # type
         )
         run = console.runtime.training.get_run(run_id)
         assert run["status"] == "completed" and [r["round"] for r in run["rounds"]] == [0, 1]
+        # The runs table shows how long the run took (m:ss), as the store timed it.
+        cell = f"table.runs tr[data-run='{run_id}'] td.duration"
+        page.wait_for_function(
+            f"() => /^\\d+:\\d\\d$/.test(document.querySelector(\"{cell}\")?.textContent || '')"
+        )
+        took = int(run["finished_at"] - run["started_at"] + 0.5)  # as Math.round
+        assert page.text_content(cell) == f"{took // 60}:{took % 60:02d}"
         page.wait_for_timeout(300)
         screenshot(page, "training")
     finally:

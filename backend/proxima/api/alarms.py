@@ -3,13 +3,18 @@ the controller publish (link lost, operator lost, emergency stop): low battery (
 warning at `server.battery_warn_pct`, critical at `server.battery_critical_pct`) and a
 drone that lands or returns on its own (an autopilot failsafe: the mode turned to
 LAND or RTL in flight with no land, abort or emergency stop commanded in the seconds
-before). Each is published as a `drone_alarm` with a severity, written to the server's
-log and to the audit trail (`alarm.raise`, actor `console`), and kept for `hello`.
+before), and a drone near or outside the geofence (a warning beyond GEOFENCE_WARN of
+`safety.geofence_radius_m` from home or of `safety.max_altitude_m`, critical outside:
+the safety rules refuse targets outside it, but wind, a failsafe or a manual pilot can
+still take a drone there). Each is published as a `drone_alarm` with a severity,
+written to the server's log and to the audit trail (`alarm.raise`, actor `console`),
+and kept for `hello`.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from collections import deque
@@ -27,11 +32,13 @@ LANDING_MODES = frozenset({"LAND", "RTL", "SMART_RTL", "AUTO.LAND", "AUTO.RTL", 
 # Actions after which a landing is the console's own doing.
 COMMANDED = frozenset({"land", "abort", "hold"})
 COMMANDED_WITHIN_S = 10.0
+GEOFENCE_WARN = 0.9  # share of the fence's radius or ceiling that warns
 
 
 @dataclass
 class _DroneWatch:
     battery_level: str = ""  # "", "warning", "critical"
+    fence_level: str = ""  # the same levels for the geofence
     mode: str = ""
     flying: bool = False
     commanded_at: float = -1e9
@@ -48,10 +55,14 @@ class AlarmMonitor:
         critical_pct: float = 10.0,
         audit: Any = None,  # proxima.api.audit.Audit
         history: int = 100,
+        geofence_radius_m: float | None = None,
+        max_altitude_m: float | None = None,
     ) -> None:
         self.bus = bus
         self.warn_pct = warn_pct
         self.critical_pct = critical_pct
+        self.geofence_radius_m = geofence_radius_m
+        self.max_altitude_m = max_altitude_m
         self.audit = audit
         self._lock = threading.Lock()
         self._drones: dict[str, _DroneWatch] = {}
@@ -108,6 +119,9 @@ class AlarmMonitor:
                             active=False,
                         ))  # fmt: skip
                     w.battery_level = level
+            fence = self._fence(drone, w, s.position)
+            if fence is not None:
+                out.append(fence)
             mode = s.mode or ""
             if (
                 mode in LANDING_MODES
@@ -126,6 +140,35 @@ class AlarmMonitor:
             # the vehicle may report "landing" a message before its mode says LAND.
             w.flying = s.landed in ("in_air", "takeoff", "landing")
         return out
+
+    def _fence(
+        self, drone: str, w: _DroneWatch, position: list[float] | None
+    ) -> DroneAlarmEvent | None:
+        """The geofence alarm when `position` (local NED, home at the origin, as the
+        safety rules take it) changes level, else None."""
+        if position is None or len(position) < 3:
+            return None
+        radius = math.hypot(position[0], position[1])
+        altitude = -position[2]
+        shares = []
+        if self.geofence_radius_m:
+            shares.append((radius / self.geofence_radius_m, f"{radius:.1f} m from home "
+                           f"(fence radius {self.geofence_radius_m:.0f} m)"))  # fmt: skip
+        if self.max_altitude_m:
+            shares.append((altitude / self.max_altitude_m, f"{altitude:.1f} m up "
+                           f"(ceiling {self.max_altitude_m:.0f} m)"))  # fmt: skip
+        if not shares:
+            return None
+        share, what = max(shares)
+        level = "critical" if share > 1.0 else "warning" if share > GEOFENCE_WARN else ""
+        if level == w.fence_level:
+            return None
+        w.fence_level = level
+        if not level:
+            back = f"{drone}: back inside the geofence, {what}"
+            return self._alarm(drone, "geofence", "warning", back, active=False)
+        where = "outside the geofence" if level == "critical" else "near the geofence"
+        return self._alarm(drone, "geofence", level, f"{drone}: {where}, {what}")
 
     @staticmethod
     def _alarm(

@@ -193,6 +193,8 @@ def create_app(
         settings.server.battery_warn_pct,
         settings.server.battery_critical_pct,
         audit=console.audit,
+        geofence_radius_m=settings.safety.geofence_radius_m,
+        max_altitude_m=settings.safety.max_altitude_m,
     )
     app.state.console = console
     install_error_handlers(app)

@@ -106,6 +106,17 @@ async function showRun(id) {
   for (const r of run.rounds || []) addRound(r);
 }
 
+// A run's wall time as m:ss (h:mm:ss past an hour); "running" until it has finished.
+function duration(r) {
+  if (!r.started_at) return "";
+  if (!r.finished_at) return r.status === "running" ? "running" : "";
+  const s = Math.max(0, Math.round(r.finished_at - r.started_at));
+  const hh = Math.floor(s / 3600);
+  const mm = Math.floor((s % 3600) / 60);
+  const ss = String(s % 60).padStart(2, "0");
+  return hh ? `${hh}:${String(mm).padStart(2, "0")}:${ss}` : `${mm}:${ss}`;
+}
+
 async function refreshRuns() {
   const runs = await api("/training/runs");
   if (selected === null && runs.length) showRun(runs[0].id);
@@ -117,6 +128,7 @@ async function refreshRuns() {
         el("td", { text: String(r.id) }),
         el("td", { class: "status", text: r.status || "" }),
         el("td", { text: r.started_at ? new Date(r.started_at * 1000).toLocaleString() : "" }),
+        el("td", { class: "duration", text: duration(r) }),
         el("td", { text: String(r.params?.rounds ?? r.rounds_total ?? "") }),
         el("td", { text: typeof r.final_accuracy === "number" ? r.final_accuracy.toFixed(3) : "" }),
         el("td", { text: r.checkpoint ? r.checkpoint.split("/").pop() : "" }),
@@ -378,7 +390,7 @@ export function mount(container) {
       "section",
       { class: "card" },
       el("h2", { text: "Past runs" }),
-      el("table", { class: "runs" }, el("thead", {}, el("tr", {}, ...["id", "status", "started", "rounds", "accuracy", "checkpoint"].map((h) => el("th", { text: h })))), el("tbody")),
+      el("table", { class: "runs" }, el("thead", {}, el("tr", {}, ...["id", "status", "started", "duration", "rounds", "accuracy", "checkpoint"].map((h) => el("th", { text: h })))), el("tbody")),
     ),
     el(
       "section",
