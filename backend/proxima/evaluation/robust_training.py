@@ -46,10 +46,12 @@ def window_accuracy(
     stride: int = 5,
 ) -> dict[str, Any]:
     """Accuracy and per-view accuracy of `classifier` on the engine's windows of `parts`
-    under `model` (see the module)."""
+    under `model` (see the module), and the parts it gets under 90 % right (`weak_parts`:
+    gesture, view, accuracy, the label it reads there most and its confidence)."""
     rng = np.random.default_rng(seed)
     right: list[np.ndarray] = []
     views: list[str] = []
+    weak: list[dict[str, Any]] = []  # parts under 90 % right: where the errors are
     for part in parts:
         if len(part) < classifier.window + 1:
             continue
@@ -60,14 +62,24 @@ def window_accuracy(
         if not len(xyz):
             continue
         probs = classifier.predict(xyz, aspect=part.aspect)
-        right.append(probs.argmax(1) == GESTURES.index(part.gesture))
+        ok = probs.argmax(1) == GESTURES.index(part.gesture)
+        right.append(ok)
         views += [part.view] * len(xyz)
+        if ok.mean() < 0.9:
+            wrong = np.bincount(probs.argmax(1)[~ok], minlength=len(GESTURES))
+            weak.append({
+                "gesture": part.gesture, "view": part.view, "windows": len(ok),
+                "accuracy": round(float(ok.mean()), 3),
+                "read_as": GESTURES[int(wrong.argmax())],
+                "confidence_when_wrong": round(float(probs[~ok].max(1).mean()), 3),
+            })  # fmt: skip
     hits = np.concatenate(right) if right else np.zeros(0, bool)
     v = np.asarray(views)
     return {
         "windows": len(hits),
         "accuracy": round(float(hits.mean()), 4) if len(hits) else None,
         "by_view": {str(k): round(float(hits[v == k].mean()), 4) for k in sorted(set(views))},
+        "weak_parts": weak,
     }
 
 
