@@ -268,7 +268,7 @@ class CalibrationManager:
 
     def _fine_tune(self, session: CalibrationSession) -> None:
         from proxima.gesture.classifier import default_checkpoint
-        from proxima.gesture.console_samples import sample_clip
+        from proxima.gesture.console_samples import row_clip
         from proxima.gesture.take_calibration import calibrate_takes
         from proxima.store.samples import Sample
 
@@ -281,18 +281,7 @@ class CalibrationManager:
                 row = db.get(Sample, take.sample_id)
                 if row is None:
                     raise CalibrationError(f"the sample of {take.gesture} is gone: record it again")
-                arr = row.arrays()
-                takes.append(
-                    sample_clip(
-                        row.id,
-                        stream=row.stream,
-                        drone=row.drone,
-                        label=take.gesture,
-                        xyz=arr.xyz.copy(),
-                        visibility=arr.visibility.copy(),
-                        times=arr.times.copy(),
-                    )
-                )
+                takes.append(row_clip(row, take.gesture))
         out = self.candidate_path(session)
 
         def progress(epoch: int, epochs: int, loss: float) -> None:

@@ -11,6 +11,7 @@ times on a 30 fps clock, so a stretch without a person shows as a gap as in the 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -31,6 +32,14 @@ def frame_numbers(times: np.ndarray, fps: float = CONSOLE_FPS) -> np.ndarray:
     r = np.rint((t - t[0]) * fps).astype(np.int64)
     i = np.arange(len(r))
     return np.maximum.accumulate(r - i) + i + 1
+
+
+def row_clip(row: Any, label: str) -> Clip:
+    """`sample_clip` of a stored `Sample` row (its own copy of the arrays), as `label`."""
+    arr = row.arrays()
+    return sample_clip(row.id, stream=row.stream, drone=row.drone, label=label,
+                       xyz=arr.xyz.copy(), visibility=arr.visibility.copy(),
+                       times=arr.times.copy())  # fmt: skip
 
 
 def sample_clip(
@@ -92,18 +101,7 @@ def load_console_samples(db_path: str | Path, drone: str | None = None) -> list[
             for row in db.scalars(q):
                 if not row.label:
                     continue
-                arr = row.arrays()
-                clips.append(
-                    sample_clip(
-                        row.id,
-                        stream=row.stream,
-                        drone=row.drone,
-                        label=row.label,
-                        xyz=arr.xyz.copy(),
-                        visibility=arr.visibility.copy(),
-                        times=arr.times.copy(),
-                    )
-                )
+                clips.append(row_clip(row, row.label))
     except SQLAlchemyError as exc:
         raise DataError(f"{path}: not a console database with samples ({exc})") from None
     finally:
