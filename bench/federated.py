@@ -2,10 +2,12 @@
 camera view per drone (3 drones), on Flower's simulation and deployment engines.
 
     .venv/bin/python -m bench.federated [--central-checkpoint PATH] [--long-rounds 20]
+        [--init CKPT] [--local-epochs N] [--keep-central PATH] [--skip-deploy] [--out JSON]
 
 Measures:
 - centralised: `proxima train`'s code and defaults on the temporal split (or a given
-  checkpoint), scored on the held-out test windows the federated runs use;
+  checkpoint; with `--init` both it and the federated runs start from that checkpoint),
+  scored on the held-out test windows the federated runs use;
 - simulation, 5 rounds x 3 drones: wall time (target <= 60 s), global accuracy per
   round, peak memory of the driver and of all its processes (Ray workers included);
 - deployment engine, 5 rounds x 3 drones: SuperLink + 3 SuperNodes on loopback, wall
@@ -69,19 +71,26 @@ def load() -> float:
     return round(os.getloadavg()[0], 2)
 
 
-def centralised(checkpoint: Path | None, test_stride: int, mirror: bool) -> dict[str, Any]:
+def centralised(
+    checkpoint: Path | None,
+    test_stride: int,
+    mirror: bool,
+    init: str = "",
+    keep: Path | None = None,
+) -> dict[str, Any]:
     from proxima.evaluation.metrics import evaluate_checkpoint
     from proxima.gesture.train import TrainConfig
     from proxima.gesture.workflow import train_model
 
     out: dict[str, Any] = {"load_average_at_start": load()}
     if checkpoint is None:
-        tmp = Path(tempfile.mkdtemp()) / "central.pt"
+        tmp = keep or Path(tempfile.mkdtemp()) / "central.pt"
         cfg = TrainConfig(threads=1, mirror=mirror)  # augment as the drones do
         t0 = time.perf_counter()
-        res = train_model(None, "tcn", "temporal", tmp, cfg, command="bench.federated")
+        res = train_model(None, "tcn", "temporal", tmp, cfg, command="bench.federated",
+                          init=init or None)  # fmt: skip
         out.update(train_seconds=round(time.perf_counter() - t0, 1), epochs=len(res.history),
-                   train_config=cfg.to_dict())  # fmt: skip
+                   train_config=cfg.to_dict(), init=init)  # fmt: skip
         checkpoint = tmp
     m = evaluate_checkpoint(checkpoint, None, "temporal", stride=test_stride)
     out.update(checkpoint=str(checkpoint), accuracy=m["accuracy"], macro_f1=m["macro_f1"],
@@ -150,6 +159,10 @@ def main() -> None:
     ap.add_argument("--mirror", action=argparse.BooleanOptionalAction, default=None,
                     help="mirroring augmentation on the drones and the centralised run "
                     "(default: FLConfig's)")  # fmt: skip
+    ap.add_argument("--init", default="", help="checkpoint both runs start from (e.g. the "
+                    "synthetic operator's model, docs/synth.md)")  # fmt: skip
+    ap.add_argument("--local-epochs", type=int, default=None, help="default: FLConfig's")
+    ap.add_argument("--keep-central", type=Path, help="save the centralised checkpoint here")
     ap.add_argument("--out", type=Path, default=OUT, help="results JSON; the curve beside it")
     args = ap.parse_args()
 
@@ -158,7 +171,9 @@ def main() -> None:
     from proxima.federated.config import FLConfig
 
     torch.set_num_threads(1)
-    base = FLConfig(rounds=args.rounds, include_samples=False)
+    base = FLConfig(rounds=args.rounds, include_samples=False, init=args.init)
+    if args.local_epochs is not None:
+        base = replace(base, local_epochs=args.local_epochs)
     if args.mirror is not None:
         base = replace(base, mirror=args.mirror)
     results: dict[str, Any] = {
@@ -166,8 +181,12 @@ def main() -> None:
                     "torch": torch.__version__, "flwr": _flwr_version()},
         "partition": "view: one LASER camera view per drone (f, l, r)",
         "mirror": base.mirror,
+        "init": args.init,
+        "local_epochs": base.local_epochs,
+        "augment": base.augment,
     }  # fmt: skip
-    central = centralised(args.central_checkpoint, base.test_stride, base.mirror)
+    central = centralised(args.central_checkpoint, base.test_stride, base.mirror, args.init,
+                          args.keep_central)  # fmt: skip
     results["centralised"] = central
     print("centralised", central["accuracy"], flush=True)
     sim, _ = simulation(base, f"{args.rounds} rounds x 3 drones")

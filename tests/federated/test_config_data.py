@@ -116,3 +116,27 @@ def test_updates_that_would_poison_the_average_are_rejected() -> None:
     missing = {k: v for k, v in weights.items() if k != first}
     assert "missing" in check_update(_reply(missing), reference)
     assert "num-examples" in check_update(_reply(weights, n=0), reference)
+
+
+def test_init_starts_the_global_model_from_a_checkpoint(tmp_path) -> None:
+    """`init`: round 0 is the checkpoint's model (scored on the real held-out windows),
+    not the seeded fresh one; a checkpoint that does not fit stops the run, named."""
+    from proxima.federated.data import test_windows
+    from proxima.federated.task import Scorer, get_weights, start_model
+    from proxima.gesture.classifier import GestureClassifier, default_checkpoint
+
+    shipped = default_checkpoint()
+    cfg = fast_config(init=str(shipped))
+    model, _ = start_model(cfg)
+    want = get_weights(GestureClassifier.load(shipped).model)
+    got = get_weights(model)
+    assert all(np.array_equal(got[k], want[k]) for k in want)
+    scorer = Scorer(cfg, test_windows(cfg))
+    _, fresh_acc = scorer(get_weights(new_model(cfg)[0]))
+    _, init_acc = scorer(got)
+    assert fresh_acc < 0.3 < 0.8 < init_acc  # the shipped model has seen these clips
+
+    with pytest.raises(ConfigError, match=r"'init': cannot load .*missing.pt"):
+        start_model(fast_config(init=str(tmp_path / "missing.pt")))
+    with pytest.raises(ConfigError, match=r"'init': .* a tcn model .* trains paper-lstm"):
+        start_model(fast_config(init=str(shipped), model="paper-lstm"))

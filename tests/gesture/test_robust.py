@@ -137,3 +137,26 @@ def test_temperature_is_fitted_on_held_out_windows_and_round_trips(
     assert np.allclose(probs, softmax(logits[:8], t), atol=1e-5)
     with pytest.raises(ValueError, match="temperature"):
         save_checkpoint(tmp_path / "d.pt", shipped.model, "tcn", shipped.pipeline, WINDOW, {}, 0.0)
+
+
+def test_a_capture_mix_is_read_from_text_and_bad_entries_are_named() -> None:
+    from proxima.gesture.robust import CAPTURE_MIX, parse_mix
+
+    assert parse_mix("clean:1:0.2,field:1:0.4,field:2:0.4") == [list(m) for m in CAPTURE_MIX]
+    for text, message in [("clean:1", "expected CONDITION:LEVEL:SHARE"),
+                          ("field:x:1", "LEVEL is an integer"),
+                          ("fog:1:1", "unknown capture condition 'fog'"),
+                          ("clean:1:-1", "shares must be >= 0")]:  # fmt: skip
+        with pytest.raises(ValueError, match=message):
+            parse_mix(text)
+
+
+def test_train_refuses_a_bad_capture_mix_before_loading_data(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from proxima.cli import app
+
+    out = tmp_path / "m.pt"
+    result = CliRunner().invoke(app, ["train", "--out", str(out), "--capture-mix", "field:2"])
+    assert result.exit_code == 2 and "capture mix 'field:2'" in result.output
+    assert not out.exists()

@@ -30,6 +30,10 @@ DataOpt = Annotated[str | None, typer.Option(help="Data folder(s), ';'-separated
 SetOpt = Annotated[
     list[str] | None, typer.Option("--set", help="Any run-config key: --set batch-size=32")
 ]
+InitOpt = Annotated[
+    Path | None,
+    typer.Option(help="Start the global model from this checkpoint (e.g. synthetic pretraining)."),
+]
 ModelsDir = Annotated[Path | None, typer.Option(help="Where the global model is saved.")]
 
 
@@ -109,6 +113,7 @@ def simulate(
     stride: Stride = None,
     seed: Annotated[int | None, typer.Option()] = None,
     data: DataOpt = None,
+    init: InitOpt = None,
     set_: SetOpt = None,
     db: DbOpt = None,
     models_dir: ModelsDir = None,
@@ -120,7 +125,8 @@ def simulate(
 
     cfg = _config(rounds=rounds, num_drones=drones, local_epochs=local_epochs, strategy=strategy,
                   partition=partition, min_clients=min_clients, stride=stride, seed=seed,
-                  data=data, set_=set_)  # fmt: skip
+                  data=data, init=str(init.resolve()) if init else None,
+                  set_=set_)  # fmt: skip
     db_path, models = _settings_paths(db, models_dir)
     cfg.models_dir = str(models) if save else ""
     store = TrainingStore(db_path)
@@ -171,6 +177,7 @@ def deploy_local(
     min_clients: MinClients = None,
     stride: Stride = None,
     data: DataOpt = None,
+    init: InitOpt = None,
     set_: SetOpt = None,
     db: DbOpt = None,
     models_dir: ModelsDir = None,
@@ -189,7 +196,7 @@ def deploy_local(
 
     cfg = _config(rounds=rounds, num_drones=drones, local_epochs=local_epochs, strategy=strategy,
                   partition=partition, min_clients=min_clients, stride=stride, data=data,
-                  set_=set_)  # fmt: skip
+                  init=str(init.resolve()) if init else None, set_=set_)  # fmt: skip
     db_path, models = _settings_paths(db, models_dir)
     security = DeploymentSettings(tls=not insecure, supernode_auth=not insecure)
     runner = FederatedRunner(db_path, models, workdir=workdir, defaults=cfg, security=security)

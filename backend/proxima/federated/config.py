@@ -87,6 +87,9 @@ class FLConfig:
     run_id: str = ""
     db: str = ""  # SQLite file the ServerApp records rounds in ("" = nowhere)
     models_dir: str = ""  # where the global model is saved ("" = not saved)
+    # a checkpoint the global model starts from instead of the seeded fresh model (e.g.
+    # the synthetic operator's model, docs/synth.md); same model and pipeline as the run
+    init: str = ""
 
     def __post_init__(self) -> None:
         self.validate()

@@ -1,10 +1,11 @@
 """The Flower ServerApp: the ground station's side of a run.
 
 Thin: it reads the run config, starts the guarded strategy from the same seeded model
-every drone builds, scores the global model on the held-out set after every round (round
-0 is the untrained model), records everything, and saves the final global model with
-its card. `app` is what `flwr run` loads (see flower-app/pyproject.toml);
-`make_server_app` builds one with in-process callbacks for the simulation engine.
+every drone builds (or from the `init` checkpoint), scores the global model on the
+held-out set after every round (round 0 is the starting model), records everything, and
+saves the final global model with its card. `app` is what `flwr run` loads (see
+flower-app/pyproject.toml); `make_server_app` builds one with in-process callbacks for
+the simulation engine.
 """
 
 from __future__ import annotations
@@ -18,11 +19,11 @@ from typing import Any
 from flwr.app import ArrayRecord, ConfigRecord, Context, MetricRecord
 from flwr.serverapp import Grid, ServerApp
 
-from proxima.federated.config import FLConfig
+from proxima.federated.config import ConfigError, FLConfig
 from proxima.federated.data import test_windows
 from proxima.federated.recorder import RunRecorder
 from proxima.federated.strategy import DronesMissing, GuardedMixin, guarded
-from proxima.federated.task import Scorer, new_model
+from proxima.federated.task import Scorer, start_model
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +46,11 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
     import torch
 
     torch.set_num_threads(cfg.threads)
-    model, _ = new_model(cfg)
+    try:
+        model, _ = start_model(cfg)
+    except ConfigError as exc:  # a bad `init` stops the run before any drone trains
+        recorder.status("failed", str(exc))
+        return ServerResult(rounds=recorder.rounds, error=str(exc))
     initial = ArrayRecord(model.state_dict())
     scorer = Scorer(cfg, test_windows(cfg))
     strategy = guarded(cfg, recorder)

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from proxima.federated.config import FLConfig
+from proxima.federated.config import ConfigError, FLConfig
 from proxima.gesture.features import Pipeline, make_pipeline
 from proxima.gesture.models import build_model
 from proxima.gesture.train import TrainConfig, evaluate_loss, features, fit
@@ -28,6 +28,32 @@ def new_model(cfg: FLConfig) -> tuple[nn.Module, Pipeline]:
     pipeline = make_pipeline(cfg.pipeline)
     torch.manual_seed(cfg.seed)
     return build_model(cfg.model, num_features=pipeline.num_features), pipeline
+
+
+def start_model(cfg: FLConfig) -> tuple[nn.Module, Pipeline]:
+    """The global model of round 0: `new_model`, or with `cfg.init` that checkpoint's
+    weights (pretraining the drones then fine-tune; the drones need no copy of it, they
+    receive the weights in round 1).
+
+    Raises:
+        ConfigError: `init` cannot be read, or is another model or pipeline than the run's.
+    """
+    model, pipeline = new_model(cfg)
+    if not cfg.init:
+        return model, pipeline
+    from proxima.gesture.classifier import GestureClassifier
+
+    try:
+        start = GestureClassifier.load(cfg.init)
+    except (OSError, ValueError, KeyError, RuntimeError) as exc:
+        raise ConfigError(f"run config 'init': cannot load {cfg.init}: {exc}") from None
+    if start.model_name != cfg.model or start.pipeline.name != cfg.pipeline:
+        raise ConfigError(
+            f"run config 'init': {cfg.init} is a {start.model_name} model with the "
+            f"{start.pipeline.name!r} pipeline, the run trains {cfg.model} with {cfg.pipeline!r}"
+        )
+    set_weights(model, get_weights(start.model))
+    return model, pipeline
 
 
 def get_weights(model: nn.Module) -> dict[str, np.ndarray]:

@@ -66,6 +66,13 @@ def train(
             "field 1, field 2) and the live One Euro filter; none: the recordings as they are."
         ),
     ] = "capture",
+    capture_mix: Annotated[
+        str | None,
+        typer.Option(
+            help="With --augment capture: the conditions windows are drawn through, "
+            "CONDITION:LEVEL:SHARE,... [default: clean:1:0.2,field:1:0.4,field:2:0.4]"
+        ),
+    ] = None,
     refit: Annotated[
         bool,
         typer.Option(
@@ -94,6 +101,13 @@ def train(
                       transitions=transitions, refit=refit, augment=augment)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
+    if capture_mix is not None:
+        from proxima.gesture.robust import parse_mix
+
+        try:
+            cfg.capture_mix = parse_mix(capture_mix)
+        except ValueError as exc:
+            _fail(exc)
     command = "proxima " + shlex.join(sys.argv[1:])
     with Progress(
         TextColumn("[bold]train[/]"), BarColumn(), TextColumn("{task.completed}/{task.total}"),

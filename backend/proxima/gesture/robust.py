@@ -60,6 +60,27 @@ def mix_models(mix: Sequence[Sequence]) -> tuple[list[CaptureModel], np.ndarray]
     return models, shares / shares.sum()
 
 
+def parse_mix(text: str) -> list[list]:
+    """A mix written `CONDITION:LEVEL:SHARE,...` (e.g. `clean:1:0.5,field:1:0.25,field:2:0.25`).
+
+    Raises:
+        ValueError: an entry that is not three fields, a level or share that is not a
+            number, or what `mix_models` refuses.
+    """
+    mix: list[list] = []
+    for entry in filter(None, (e.strip() for e in text.split(","))):
+        fields = entry.split(":")
+        if len(fields) != 3:
+            raise ValueError(f"capture mix {entry!r}: expected CONDITION:LEVEL:SHARE")
+        try:
+            mix.append([fields[0], int(fields[1]), float(fields[2])])
+        except ValueError:
+            msg = f"capture mix {entry!r}: LEVEL is an integer, SHARE a number"
+            raise ValueError(msg) from None
+    mix_models(mix)
+    return mix
+
+
 def history_rows(mix: Sequence[Sequence], window: int = WINDOW, warmup: int = WARMUP) -> int:
     """Source rows (30 fps) a window needs for every model of `mix`."""
     models, _ = mix_models(mix)
