@@ -38,3 +38,35 @@ def test_members_must_agree_on_the_window() -> None:
         EnsembleClassifier([a, b])
     with pytest.raises(ValueError, match="at least one"):
         EnsembleClassifier([])
+
+
+def test_the_engine_runs_an_ensemble_named_by_comma_joined_checkpoints(
+    laser_clips, tmp_path
+) -> None:
+    """`--checkpoint A,B` through the real engine on a replayed held-out stream: each
+    gesture event carries the ensemble's mean probability, not a member's."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from proxima.cli import app
+    from proxima.engine import load_classifier
+    from proxima.evaluation.latency import build_streams
+
+    ens = load_classifier(",".join(map(str, MEMBERS)))
+    assert isinstance(ens, EnsembleClassifier) and len(ens.members) == 2
+    (stream,) = build_streams(laser_clips, [1003], 3, "test", 3.0, 4.0)
+    source = tmp_path / "s.csv"
+    stream.write(source)
+    runs = {}
+    for name, ckpt in (("ens", ",".join(map(str, MEMBERS))), ("one", str(MEMBERS[0]))):
+        events = tmp_path / f"{name}.jsonl"
+        args = ["recognize", "--checkpoint", ckpt, "--source", f"replay:{source}@30"]
+        result = CliRunner().invoke(app, [*args, "--events", str(events)])
+        assert result.exit_code == 0, result.output
+        rows = [json.loads(line) for line in events.read_text().splitlines()]
+        runs[name] = [e for e in rows if e["type"] == "gesture"]
+    assert runs["ens"] and len(runs["ens"]) == len(runs["one"])
+    assert any(
+        a["confidence"] != b["confidence"] for a, b in zip(runs["ens"], runs["one"], strict=True)
+    )

@@ -30,7 +30,10 @@ class StreamSpec(BaseModel):
     )
     drone: str = Field("", description="drone whose camera this is (default: the name)")
     priority: int = Field(0, ge=0, description="0 = main drone, 1 = secondary, ...")
-    checkpoint: Path | None = Field(None, description="gesture model (default: the engine's)")
+    checkpoint: Path | None = Field(
+        None,
+        description="gesture model, or comma-joined models (an ensemble; default: the engine's)",
+    )
 
     @model_validator(mode="before")
     @classmethod

@@ -52,14 +52,21 @@ class StreamStats:
 
 
 def load_classifier(path: str | Path | None) -> Classifier:
-    """The gesture classifier at `path` (default: the shipped checkpoint).
+    """The gesture classifier at `path` (default: the shipped checkpoint); comma-joined
+    paths (`a.pt,b.pt,c.pt`) are an ensemble, the mean of their probabilities
+    (`proxima.gesture.ensemble`).
 
     Raises:
         FileNotFoundError: no such checkpoint.
-        ValueError: the file is not a Proxima gesture checkpoint.
+        ValueError: the file is not a Proxima gesture checkpoint, or ensemble members
+            disagree on window or labels.
     """
     from proxima.gesture.classifier import GestureClassifier
 
+    if path is not None and "," in str(path):
+        from proxima.gesture.ensemble import EnsembleClassifier
+
+        return EnsembleClassifier.load([p.strip() for p in str(path).split(",") if p.strip()])
     return GestureClassifier.load(path)
 
 

@@ -5,8 +5,9 @@ windows, so the mean keeps the consistent evidence and damps a single member's b
 seeds of the capture recipe cut the moving average's wrong commands on held-out streams
 by about 40 %; the errors all members share stay (docs/experiments.md, "The full-length
 capture recipe held out, seeds and ensembles"). Each member is 0.2 MB and a window costs
-it well under a millisecond, small against the pose estimator's frame. Used by the
-benchmarks; the engine loads one checkpoint per stream.
+it well under a millisecond, small against the pose estimator's frame. The engine loads
+one for a `checkpoint` of comma-joined paths (`proxima.engine.load_classifier`), as do
+the benchmarks.
 """
 
 from __future__ import annotations
