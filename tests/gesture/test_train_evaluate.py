@@ -37,8 +37,10 @@ def test_paper_lstm_learns_with_clipping(laser_clips) -> None:
     w = make_windows(parts.train, stride=8)
     pipe = PaperPipeline().fit(to_metric(w.xyz, w.aspect))
     model = build_model("paper-lstm")
+    # the recordings as they are: capture noise on 8 short epochs made the final loss
+    # depend on the CPU's float rounding (2.32 on one machine, under 2.26 on another)
     cfg = TrainConfig(epochs=8, stride=8, threads=1, lr=5e-3, rotate_deg=0, yaw_deg=0,
-                      mirror=False)  # fmt: skip
+                      mirror=False, augment="none")  # fmt: skip
     history = fit(model, pipe, w, None, cfg)
     assert history[-1].train_loss < history[0].train_loss
     assert history[-1].train_loss < np.log(13) - 0.3  # no collapse to a constant
