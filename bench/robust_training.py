@@ -25,10 +25,12 @@ import shlex
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import torch
 
 from proxima.control import ControlSettings
+from proxima.engine import load_classifier
 from proxima.engine.config import EngineSettings
 from proxima.evaluation.latency import evaluate_config
 from proxima.evaluation.robust_training import (
@@ -41,7 +43,6 @@ from proxima.evaluation.robust_training import (
     window_accuracy,
 )
 from proxima.gesture.capture import condition
-from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.datasets import load_data
 from proxima.gesture.ensemble import EnsembleClassifier
 from proxima.gesture.windows import WINDOW, split_clips
@@ -58,6 +59,11 @@ def log(msg: str) -> None:
     print(f"[{time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
 
 
+def temperatures(clf: Any) -> list[float]:
+    """The softmax temperature of each member (one for a single checkpoint)."""
+    return [m.temperature for m in (clf.members if isinstance(clf, EnsembleClassifier) else [clf])]
+
+
 def windows_cmd(args: argparse.Namespace) -> dict:
     data = load_data(["laser"])
     out: dict = {}
@@ -65,11 +71,9 @@ def windows_cmd(args: argparse.Namespace) -> dict:
         name, _, rest = spec.partition("=")
         path, _, split = rest.partition(".pt:")  # splits have colons of their own
         path += ".pt"
-        paths = path.split(",")  # several: their ensemble
-        clf = GestureClassifier.load(path) if len(paths) == 1 else EnsembleClassifier.load(paths)
+        clf = load_classifier(path)  # comma-joined: their ensemble
         test = split_clips(data.clips, split, WINDOW).test
-        temps = [GestureClassifier.load(p).temperature for p in paths]
-        row = {"checkpoint": path, "split": split, "temperature": temps}
+        row = {"checkpoint": path, "split": split, "temperature": temperatures(clf)}
         for key, (cond, level, smoothed) in CONDITIONS.items():
             row[key] = window_accuracy(clf, test, condition(cond, level), args.seed, smoothed)
         out[name] = row
@@ -79,8 +83,7 @@ def windows_cmd(args: argparse.Namespace) -> dict:
 
 def streams_cmd(args: argparse.Namespace) -> dict:
     clips = load_data(["laser"]).clips
-    paths = args.checkpoint.split(",")  # several: their ensemble (gesture/ensemble.py)
-    clf = GestureClassifier.load(paths[0]) if len(paths) == 1 else EnsembleClassifier.load(paths)
+    clf = load_classifier(args.checkpoint)  # comma-joined: their ensemble
     settings = EngineSettings()
     conds = {"clean": condition("clean"), "field1": condition("field", 1)}
     tune_sets, eval_sets = {}, {}
@@ -130,7 +133,7 @@ def streams_cmd(args: argparse.Namespace) -> dict:
         "segments": args.segments,
         "eval_hours": hours,
         "checkpoint": args.checkpoint,
-        "temperature": [GestureClassifier.load(p).temperature for p in paths],
+        "temperature": temperatures(clf),
     }
     return result
 

@@ -60,6 +60,8 @@ def _config(**values: Any) -> Any:
 
     sets = values.pop("set_", None) or []
     params = {k: v for k, v in values.items() if v is not None}
+    if isinstance(params.get("init"), Path):  # absolute: the ServerApp runs elsewhere
+        params["init"] = str(params["init"].resolve())
     for item in sets:
         key, sep, value = item.partition("=")
         if not sep:
@@ -125,8 +127,7 @@ def simulate(
 
     cfg = _config(rounds=rounds, num_drones=drones, local_epochs=local_epochs, strategy=strategy,
                   partition=partition, min_clients=min_clients, stride=stride, seed=seed,
-                  data=data, init=str(init.resolve()) if init else None,
-                  set_=set_)  # fmt: skip
+                  data=data, init=init, set_=set_)  # fmt: skip
     db_path, models = _settings_paths(db, models_dir)
     cfg.models_dir = str(models) if save else ""
     store = TrainingStore(db_path)
@@ -196,7 +197,7 @@ def deploy_local(
 
     cfg = _config(rounds=rounds, num_drones=drones, local_epochs=local_epochs, strategy=strategy,
                   partition=partition, min_clients=min_clients, stride=stride, data=data,
-                  init=str(init.resolve()) if init else None, set_=set_)  # fmt: skip
+                  init=init, set_=set_)  # fmt: skip
     db_path, models = _settings_paths(db, models_dir)
     security = DeploymentSettings(tls=not insecure, supernode_auth=not insecure)
     runner = FederatedRunner(db_path, models, workdir=workdir, defaults=cfg, security=security)

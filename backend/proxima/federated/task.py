@@ -41,17 +41,12 @@ def start_model(cfg: FLConfig) -> tuple[nn.Module, Pipeline]:
     model, pipeline = new_model(cfg)
     if not cfg.init:
         return model, pipeline
-    from proxima.gesture.classifier import GestureClassifier
+    from proxima.gesture.workflow import start_checkpoint
 
     try:
-        start = GestureClassifier.load(cfg.init)
-    except (OSError, ValueError, KeyError, RuntimeError) as exc:
-        raise ConfigError(f"run config 'init': cannot load {cfg.init}: {exc}") from None
-    if start.model_name != cfg.model or start.pipeline.name != cfg.pipeline:
-        raise ConfigError(
-            f"run config 'init': {cfg.init} is a {start.model_name} model with the "
-            f"{start.pipeline.name!r} pipeline, the run trains {cfg.model} with {cfg.pipeline!r}"
-        )
+        start = start_checkpoint(cfg.init, cfg.model, cfg.pipeline)
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"run config 'init': {exc}") from None
     set_weights(model, get_weights(start.model))
     return model, pipeline
 

@@ -152,7 +152,7 @@ def train_model(
     t0 = time.perf_counter()
     check_augment(cfg)
     calibrating = init is not None and parse_calibration(split) is not None
-    start = _init_checkpoint(init, model_name, pipeline_name) if init and not calibrating else None
+    start = start_checkpoint(init, model_name, pipeline_name) if init and not calibrating else None
     data = load_data(data_specs)
     init_clf = load_init(init, split, model_name) if init is not None and calibrating else None
     parts = split_clips(data.clips, split, WINDOW, data.uav_dir)
@@ -237,10 +237,15 @@ def train_model(
                        time.perf_counter() - t0, refit_history)  # fmt: skip
 
 
-def _init_checkpoint(
+def start_checkpoint(
     path: str | Path, model_name: str, pipeline_name: str | None
 ) -> GestureClassifier:
-    """The checkpoint a run starts from, checked to be the same model and pipeline."""
+    """The checkpoint a run starts from (`--init`, and federated runs' `init`), checked to
+    be the same model, pipeline and window.
+
+    Raises:
+        FileNotFoundError, ValueError: not a checkpoint, or another model, pipeline or window.
+    """
     start = GestureClassifier.load(path)
     wanted = pipeline_name or DEFAULT_PIPELINE[model_name]
     if start.model_name != model_name or start.pipeline.name != wanted:
