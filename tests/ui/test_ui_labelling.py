@@ -68,6 +68,8 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
         # The gesture chosen stays chosen after leaving the page.
         page.click("nav a[data-page=live]")
         page.click("nav a[data-page=labelling]")
+        # The page mounts on the hash change, after the click returns.
+        page.wait_for_selector("select.gesture")
         assert page.eval_on_selector("select.gesture", "s => s.value") == "land_direction"
         with console.runtime.app.state.console.sessions() as db:
             kept = kept_samples(db, "main")
