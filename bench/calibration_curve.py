@@ -106,14 +106,20 @@ def run_group(args: argparse.Namespace) -> None:
     from proxima.gesture.workflow import train_model
 
     torch.set_num_threads(args.threads)
+    if args.share is not None:  # a variant of the calibration's share of each epoch
+        from proxima.gesture import workflow
+
+        workflow.CALIBRATION_SHARE = args.share
     data_name, splits = GROUPS[args.group]
     splits = tuple(args.split) if args.split else splits
     data = load_data([data_name])
-    out = RESULTS / f"calibration-curve.{args.group}{args.tag}.json"
+    out = args.out or RESULTS / f"calibration-curve.{args.group}{args.tag}.json"
     result: dict[str, Any] = json.loads(out.read_text()) if out.exists() and args.resume else {}
     result.setdefault("config", {}).update(
         epochs=args.epochs, patience=args.patience, tune_epochs=args.tune_epochs,
-        threads=args.threads, seed=args.seed, data=data_name,
+        threads=args.threads, seed=args.seed, data=data_name, pipeline=args.pipeline,
+        share=args.share,
+        pretrain=str(args.pretrain) if args.pretrain else None,
     )  # fmt: skip
     points = result.setdefault("points", [])
     RUNS.mkdir(parents=True, exist_ok=True)
@@ -144,11 +150,18 @@ def run_group(args: argparse.Namespace) -> None:
               f"({rem['windows']} windows) tails {tails} [{t:.0f} s]", flush=True)  # fmt: skip
 
     base: dict[str, Path] = {}
+    pipe = args.pipeline
+    tag = args.tag  # a variant's fine-tuned checkpoints apart from the main run's
+    # inner models are shared by every variant with the same pipeline and start
+    base_tag = (f"-{pipe}" if pipe and pipe != "body" else "") + (
+        f"-pre-{args.pretrain.stem}" if args.pretrain else ""
+    )
     for split in splits:  # the inner models: the 0 s point and what fine-tuning starts from
-        ckpt = RUNS / f"base-{split.replace(':', '-')}-s{args.seed}.pt"
+        ckpt = RUNS / f"base-{split.replace(':', '-')}-s{args.seed}{base_tag}.pt"
         if not ckpt.exists():
             t0 = time.perf_counter()
-            r = train_model([data_name], "tcn", split, ckpt, replace(base_cfg))
+            r = train_model([data_name], "tcn", split, ckpt, replace(base_cfg), pipe,
+                            init=args.pretrain)  # fmt: skip
             t, n = time.perf_counter() - t0, len(r.history)
         else:
             t, n = 0.0, 0
@@ -163,13 +176,14 @@ def run_group(args: argparse.Namespace) -> None:
                 if done(split, seconds, recipe):
                     continue
                 cal = f"calibrate:{split}:{seconds:g}"
-                ckpt = RUNS / f"{recipe}-{split.replace(':', '-')}-{seconds:g}s-s{args.seed}.pt"
+                name = f"{recipe}-{split.replace(':', '-')}-{seconds:g}s-s{args.seed}{tag}.pt"
+                ckpt = RUNS / name
                 t0 = time.perf_counter()
                 if recipe == "finetune":
-                    r = train_model([data_name], "tcn", cal, ckpt, replace(tune_cfg),
+                    r = train_model([data_name], "tcn", cal, ckpt, replace(tune_cfg), pipe,
                                     init=base[split])  # fmt: skip
                 else:
-                    r = train_model([data_name], "tcn", cal, ckpt, replace(base_cfg))
+                    r = train_model([data_name], "tcn", cal, ckpt, replace(base_cfg), pipe)
                 record(split, seconds, recipe, ckpt, time.perf_counter() - t0, len(r.history))
 
 
@@ -281,7 +295,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--resume", action="store_true", help="keep the points already in the JSON")
-    ap.add_argument("--tag", default="", help="write calibration-curve.<group><tag>.json")
+    ap.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="the group's JSON (default: bench/results/calibration-curve."
+        "<group><tag>.json, which --merge reads; a variant goes elsewhere)",
+    )
+    ap.add_argument("--share", type=float, default=None,
+                    help="the calibration clips' share of each epoch (default: "
+                    "proxima.gesture.workflow.CALIBRATION_SHARE)")  # fmt: skip
+    ap.add_argument("--pipeline", default=None, help="body (default) or body-image")
+    ap.add_argument("--pretrain", type=Path, default=None,
+                    help="inner models start from this checkpoint (e.g. the synthetic "
+                    "operator's model)")  # fmt: skip
+    ap.add_argument("--tag", default="", help="write calibration-curve.<group><tag>.json "
+                    "(and name a variant's fine-tuned checkpoints)")  # fmt: skip
     args = ap.parse_args(argv)
     if args.merge:
         merge()

@@ -3,6 +3,7 @@ camera view per drone (3 drones), on Flower's simulation and deployment engines.
 
     .venv/bin/python -m bench.federated [--central-checkpoint PATH] [--long-rounds 20]
         [--init CKPT] [--local-epochs N] [--keep-central PATH] [--skip-deploy] [--out JSON]
+        [--strategy NAME]
 
 Measures:
 - centralised: `proxima train`'s code and defaults on the temporal split (or a given
@@ -162,6 +163,7 @@ def main() -> None:
     ap.add_argument("--init", default="", help="checkpoint both runs start from (e.g. the "
                     "synthetic operator's model, docs/synth.md)")  # fmt: skip
     ap.add_argument("--local-epochs", type=int, default=None, help="default: FLConfig's")
+    ap.add_argument("--strategy", default=None, help="default: FLConfig's")
     ap.add_argument("--keep-central", type=Path, help="save the centralised checkpoint here")
     ap.add_argument("--out", type=Path, default=OUT, help="results JSON; the curve beside it")
     args = ap.parse_args()
@@ -176,6 +178,8 @@ def main() -> None:
         base = replace(base, local_epochs=args.local_epochs)
     if args.mirror is not None:
         base = replace(base, mirror=args.mirror)
+    if args.strategy is not None:
+        base = replace(base, strategy=args.strategy)
     results: dict[str, Any] = {
         "machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
                     "torch": torch.__version__, "flwr": _flwr_version()},
@@ -184,6 +188,7 @@ def main() -> None:
         "init": args.init,
         "local_epochs": base.local_epochs,
         "augment": base.augment,
+        "strategy": base.strategy,
     }  # fmt: skip
     central = centralised(args.central_checkpoint, base.test_stride, base.mirror, args.init,
                           args.keep_central)  # fmt: skip

@@ -33,6 +33,7 @@ def test_bad_run_config_names_the_key() -> None:
         FLConfig.from_run_config({"rounds-x": 3})
     with pytest.raises(ConfigError, match=r"'pipeline'.*scale-free"):
         FLConfig(pipeline="paper")  # MinMax statistics would be per drone
+    assert FLConfig(pipeline="body-image").pipeline == "body-image"  # scale-free too
     cfg = FLConfig.from_run_config({"rounds": 7, "include-samples": "false", "strategy": "fedprox"})
     assert (cfg.rounds, cfg.include_samples, cfg.strategy) == (7, False, "fedprox")
 

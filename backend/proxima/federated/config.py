@@ -24,6 +24,8 @@ Strategy = Literal["fedavg", "fedprox", "fedadam", "fedavgm"]
 Partition = Literal["view", "iid", "dirichlet"]
 STRATEGIES: tuple[str, ...] = get_args(Strategy)
 PARTITIONS: tuple[str, ...] = get_args(Partition)
+# pipelines without fitted statistics (docs/gesture.md), so no drone scales on its own
+SCALE_FREE_PIPELINES = ("body", "body-image")
 VIEWS = ("f", "l", "r")
 VIEW_NAMES = {"f": "front", "l": "left", "r": "right"}
 APP_DIR = Path(__file__).resolve().parent / "flower-app"
@@ -106,11 +108,11 @@ class FLConfig:
             except ValidationError as exc:
                 what = "; ".join(e["msg"] for e in exc.errors())
                 raise ConfigError(f"run config {_key(name)!r}: {what} (got {value!r})") from None
-        if self.pipeline != "body":
+        if self.pipeline not in SCALE_FREE_PIPELINES:
             raise ConfigError(
-                f"run config 'pipeline': only the scale-free 'body' pipeline is supported for "
-                f"federated runs: the 'paper' MinMax pipeline would scale each drone with "
-                f"statistics only it has (got {self.pipeline!r})"
+                f"run config 'pipeline': only the scale-free 'body' and 'body-image' pipelines "
+                f"are supported for federated runs: the 'paper' MinMax pipeline would scale "
+                f"each drone with statistics only it has (got {self.pipeline!r})"
             )
         from proxima.gesture.models import MODELS
 
