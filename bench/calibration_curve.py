@@ -100,6 +100,7 @@ def evaluate_point(
 def run_group(args: argparse.Namespace) -> None:
     import torch
 
+    from proxima.gesture import workflow
     from proxima.gesture.classifier import GestureClassifier
     from proxima.gesture.datasets import load_data
     from proxima.gesture.train import TrainConfig
@@ -107,8 +108,6 @@ def run_group(args: argparse.Namespace) -> None:
 
     torch.set_num_threads(args.threads)
     if args.share is not None:  # a variant of the calibration's share of each epoch
-        from proxima.gesture import workflow
-
         workflow.CALIBRATION_SHARE = args.share
     data_name, splits = GROUPS[args.group]
     splits = tuple(args.split) if args.split else splits
@@ -118,7 +117,7 @@ def run_group(args: argparse.Namespace) -> None:
     result.setdefault("config", {}).update(
         epochs=args.epochs, patience=args.patience, tune_epochs=args.tune_epochs,
         threads=args.threads, seed=args.seed, data=data_name, pipeline=args.pipeline,
-        share=args.share,
+        share=workflow.CALIBRATION_SHARE,
         pretrain=str(args.pretrain) if args.pretrain else None,
     )  # fmt: skip
     points = result.setdefault("points", [])
@@ -291,7 +290,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--compare", type=float, nargs="*", default=[5.0])
     ap.add_argument("--epochs", type=int, default=20, help="inner and scratch models")
     ap.add_argument("--patience", type=int, default=5)
-    ap.add_argument("--tune-epochs", type=int, default=6)
+    ap.add_argument("--tune-epochs", type=int, default=12)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--resume", action="store_true", help="keep the points already in the JSON")
