@@ -452,7 +452,7 @@ export const MESSAGE_TYPES = Object.freeze([
  * @property {number | null} [learning_rate]
  * @property {number | null} [fraction_fit]
  * @property {number | null} [min_clients]
- * @property {"fedavg" | "fedprox" | "fedadam" | "fedavgm" | null} [strategy]
+ * @property {"fedavg" | "fedprox" | "fedadam" | "fedavgm" | "scaffold" | null} [strategy]
  * @property {"view" | "iid" | "dirichlet" | null} [partition]
  * @property {boolean | null} [include_samples]
  */

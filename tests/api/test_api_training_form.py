@@ -47,7 +47,7 @@ def test_the_form_gets_the_bounds_and_the_runners_defaults(tmp_path: Path) -> No
     assert form["fraction_fit"]["exclusiveMinimum"] == 0 and form["fraction_fit"]["maximum"] == 1
     # min_clients: at most the drones of the runner's federation (its default fleet of 3).
     assert (form["local_epochs"]["maximum"], form["min_clients"]["maximum"]) == (100, 3)
-    assert form["strategy"]["enum"] == ["fedavg", "fedprox", "fedadam", "fedavgm"]
+    assert form["strategy"]["enum"] == ["fedavg", "fedprox", "fedadam", "fedavgm", "scaffold"]
     assert form["strategy"]["default"] == "fedprox"
     assert form["include_samples"] == {"type": "boolean", "default": True}
     assert {k: v["default"] for k, v in form.items()} == {

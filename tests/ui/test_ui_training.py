@@ -77,7 +77,7 @@ def test_viewer_gets_403_on_starting_a_run(page, tmp_path: Path) -> None:  # typ
         strategies = page.eval_on_selector_all(
             "form.start-run select[name=strategy] option", "els => els.map(e => e.value)"
         )
-        assert strategies == ["fedavg", "fedprox", "fedadam", "fedavgm"]
+        assert strategies == ["fedavg", "fedprox", "fedadam", "fedavgm", "scaffold"]
         assert page.is_checked("form.start-run input[name=include_samples]")
         with page.expect_response(
             lambda r: r.url.endswith("/api/training/runs") and r.request.method == "POST"

@@ -22,7 +22,9 @@ DbOpt = Annotated[
 JsonOut = Annotated[Path | None, typer.Option("--json", help="Write the run record here.")]
 PngOut = Annotated[Path | None, typer.Option(help="Write the learning curve here.")]
 LocalEpochs = Annotated[int | None, typer.Option(help="Local epochs a round.")]
-Strategy = Annotated[str | None, typer.Option(help="fedavg | fedprox | fedadam | fedavgm")]
+Strategy = Annotated[
+    str | None, typer.Option(help="fedavg | fedprox | fedadam | fedavgm | scaffold")
+]
 Partition = Annotated[str | None, typer.Option(help="view | iid | dirichlet")]
 MinClients = Annotated[int | None, typer.Option(help="Drones a round needs.")]
 Stride = Annotated[int | None, typer.Option(help="Frames between training windows.")]

@@ -13,15 +13,26 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from flwr.app import ArrayRecord, ConfigRecord, Context, Message, MetricRecord, RecordDict
+from flwr.app import Array, ArrayRecord, ConfigRecord, Context, Message, MetricRecord, RecordDict
 from flwr.clientapp import ClientApp
 
 from proxima.federated.config import FLConfig, default_drone_name
 from proxima.federated.data import DroneData, drone_data
-from proxima.federated.task import Scorer, new_model, set_weights, train_local
+from proxima.federated.task import (
+    Scorer,
+    new_model,
+    next_control,
+    parameters_of,
+    set_weights,
+    train_local,
+)
 
 # Keys the server adds to the run config in its messages (not FLConfig fields).
 _SERVER_KEYS = ("server-round",)
+# SCAFFOLD: the fleet's control variate in the server's message, and the drone's own,
+# kept in the node's state between rounds and sent back for the fleet's average.
+CONTROL = "control"
+_OWN_CONTROL = "scaffold-control"
 
 
 @dataclass(frozen=True)
@@ -122,7 +133,17 @@ def train(msg: Message, context: Context) -> Message:
     model, pipeline = new_model(cfg)
     set_weights(model, _arrays(msg))
     server_round = _int(msg.content.config_records["config"].get("server-round", 0))
-    res = train_local(model, pipeline, data.fit, data.val, cfg, server_round, node.partition_id)
+    scaffold = cfg.strategy == "scaffold"
+    fleet, own = _controls(msg, context) if scaffold else (None, None)
+    start = parameters_of(model)
+    correction = {k: v - (own or {}).get(k, 0.0) for k, v in fleet.items()} if fleet else None
+    res = train_local(
+        model, pipeline, data.fit, data.val, cfg, server_round, node.partition_id, correction
+    )
+    control = None
+    if scaffold:
+        control = next_control(own, fleet, start, parameters_of(model), res.steps, res.lr)
+        context.state[_OWN_CONTROL] = arrays_of(control)
     metrics = {
         "num-examples": res.num_examples,
         "train_loss": res.train_loss,
@@ -131,7 +152,29 @@ def train(msg: Message, context: Context) -> Message:
         "seconds": res.seconds,
         "samples_used": data.samples_used,
     }
-    return _reply(msg, node, data, ArrayRecord(model.state_dict()), metrics)
+    reply = _reply(msg, node, data, ArrayRecord(model.state_dict()), metrics)
+    if control is not None:
+        reply.content[CONTROL] = arrays_of(control)
+    return reply
+
+
+def arrays_of(named: dict[str, np.ndarray]) -> ArrayRecord:
+    return ArrayRecord({k: Array(np.ascontiguousarray(v)) for k, v in named.items()})
+
+
+def _controls(
+    msg: Message, context: Context
+) -> tuple[dict[str, np.ndarray] | None, dict[str, np.ndarray] | None]:
+    """(the fleet's c from the message, this drone's c_i from its state); None before
+    the first round has made one (a drone that joins later starts with c_i = 0)."""
+
+    def named(record: ArrayRecord | None) -> dict[str, np.ndarray] | None:
+        return {k: a.numpy() for k, a in record.items()} if record is not None else None
+
+    return (
+        named(msg.content.array_records.get(CONTROL)),
+        named(context.state.array_records.get(_OWN_CONTROL)),
+    )
 
 
 @app.evaluate()

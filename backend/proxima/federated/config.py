@@ -20,7 +20,7 @@ from typing import Annotated, Any, Literal, get_args, get_origin, get_type_hints
 
 from pydantic import ConfigDict, Field, TypeAdapter, ValidationError
 
-Strategy = Literal["fedavg", "fedprox", "fedadam", "fedavgm"]
+Strategy = Literal["fedavg", "fedprox", "fedadam", "fedavgm", "scaffold"]
 Partition = Literal["view", "iid", "dirichlet"]
 STRATEGIES: tuple[str, ...] = get_args(Strategy)
 PARTITIONS: tuple[str, ...] = get_args(Partition)

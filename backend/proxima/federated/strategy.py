@@ -1,7 +1,8 @@
 """Flower strategies with the guard rails a fleet of drones needs.
 
 `guarded(cfg, recorder)` returns Flower's own FedAvg (the paper's sample-weighted
-average), FedProx, FedAdam or FedAvgM, subclassed with a mixin that:
+average), FedProx, FedAdam or FedAvgM, or `Scaffold` (FedAvg plus SCAFFOLD's control
+variates, which Flower does not ship), subclassed with a mixin that:
 - waits for the drones a round needs, reporting "waiting for N drones" through the
   recorder, and gives up with `DronesMissing` after `wait_timeout_s` (Flower's own
   sampling would wait forever);
@@ -22,7 +23,7 @@ from collections.abc import Iterable
 from typing import Any, Protocol
 
 import numpy as np
-from flwr.app import ArrayRecord, ConfigRecord, Message, MetricRecord
+from flwr.app import Array, ArrayRecord, ConfigRecord, Message, MetricRecord
 from flwr.serverapp import Grid
 from flwr.serverapp.strategy import FedAdam, FedAvg, FedAvgM, FedProx
 
@@ -57,9 +58,23 @@ class _FilteredGrid:
         return getattr(self._grid, name)
 
 
-def check_update(content: Any, reference: dict[str, tuple[int, ...]]) -> str | None:
-    """Why a training reply cannot be averaged, or None if it can."""
-    arrays = list(content.array_records.values())
+def check_update(
+    content: Any, reference: dict[str, tuple[int, ...]], control: bool = False
+) -> str | None:
+    """Why a training reply cannot be averaged, or None if it can. With `control`
+    (SCAFFOLD) the reply also carries a "control" ArrayRecord: a subset of the model's
+    arrays (its parameters), same shapes, finite."""
+    records = dict(content.array_records)
+    if control:
+        if "control" not in records:
+            return "SCAFFOLD reply without its 'control' ArrayRecord"
+        for key, arr in records.pop("control").items():
+            a = arr.numpy()
+            if key not in reference or tuple(a.shape) != reference[key]:
+                return f"control {key!r} does not match a model array"
+            if not np.issubdtype(a.dtype, np.number) or not np.isfinite(a).all():
+                return f"control {key!r} has non-finite values"
+    arrays = list(records.values())
     metrics = list(content.metric_records.values())
     if len(arrays) != 1 or len(metrics) != 1:
         return (
@@ -229,7 +244,8 @@ class GuardedMixin:
                     detail=f"error reply (code {msg.error.code}): {msg.error.reason}"[:2000],
                 )
                 continue
-            problem = check_update(msg.content, self.reference) if check else None
+            control = getattr(self, "uses_control", False)
+            problem = check_update(msg.content, self.reference, control) if check else None
             if not check and len(msg.content.metric_records) != 1:
                 problem = "expected one MetricRecord"
             if problem:
@@ -270,7 +286,62 @@ def _f(value: Any) -> float | None:
     return float(value)
 
 
-BASES = {"fedavg": FedAvg, "fedprox": FedProx, "fedadam": FedAdam, "fedavgm": FedAvgM}
+class Scaffold(FedAvg):
+    """FedAvg plus SCAFFOLD's control variates (Karimireddy et al. 2020), for drones that
+    each see one view: every drone replies with its loss gradient at the fleet's weights
+    (c_i, under "control"); the fleet's c is their sample-weighted average over each
+    drone's latest c_i, sent with the next round's weights; each drone adds c - c_i to
+    its local gradients (`task.control_penalty`). Only gradients leave a drone, the same
+    size as the weights it already sends."""
+
+    uses_control = True
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.controls: dict[int, tuple[float, dict[str, np.ndarray]]] = {}
+
+    def fleet_control(self) -> dict[str, np.ndarray] | None:
+        if not self.controls:
+            return None
+        total = sum(n for n, _ in self.controls.values())
+        keys = next(iter(self.controls.values()))[1].keys()
+        return {
+            k: np.sum([n * c[k] for n, c in self.controls.values()], axis=0) / total
+            for k in keys
+        }
+
+    def configure_train(
+        self, server_round: int, arrays: ArrayRecord, config: ConfigRecord, grid: Grid
+    ) -> Iterable[Message]:
+        messages = list(super().configure_train(server_round, arrays, config, grid))
+        fleet = self.fleet_control()
+        if fleet is not None:
+            record = ArrayRecord({k: Array(np.asarray(v, np.float32)) for k, v in fleet.items()})
+            for msg in messages:  # Flower's messages share one RecordDict
+                msg.content["control"] = record
+        return messages
+
+    def aggregate_train(
+        self, server_round: int, replies: Iterable[Message]
+    ) -> tuple[ArrayRecord | None, MetricRecord | None]:
+        replies = list(replies)
+        for msg in replies:  # FedAvg averages exactly one ArrayRecord: take ours out
+            if msg.has_error() or "control" not in msg.content.array_records:
+                continue
+            record = msg.content.array_records["control"]
+            del msg.content["control"]
+            n = float(next(iter(msg.content.metric_records.values()))["num-examples"])  # type: ignore[arg-type]
+            self.controls[msg.metadata.src_node_id] = (n, {k: a.numpy() for k, a in record.items()})
+        return super().aggregate_train(server_round, replies)
+
+
+BASES = {
+    "fedavg": FedAvg,
+    "fedprox": FedProx,
+    "fedadam": FedAdam,
+    "fedavgm": FedAvgM,
+    "scaffold": Scaffold,
+}
 
 
 def guarded(cfg: FLConfig, recorder: Recorder) -> FedAvg:

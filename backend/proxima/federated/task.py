@@ -18,7 +18,7 @@ from torch import nn
 from proxima.federated.config import ConfigError, FLConfig
 from proxima.gesture.features import Pipeline, make_pipeline
 from proxima.gesture.models import build_model
-from proxima.gesture.train import TrainConfig, evaluate_loss, features, fit
+from proxima.gesture.train import TrainConfig, chosen_schedule, evaluate_loss, features, fit
 from proxima.gesture.windows import Windows
 
 
@@ -89,6 +89,49 @@ def proximal_penalty(model: nn.Module, mu: float) -> Callable[[nn.Module], torch
     return penalty
 
 
+def control_step(
+    correction: dict[str, np.ndarray] | None, lr: float
+) -> Callable[[nn.Module], None] | None:
+    """SCAFFOLD's drift correction, applied after every optimiser step: w -= lr (c - c_i),
+    with c and c_i in the units of an AdamW step (`next_control`), so each step moves
+    the way the fleet's average step did rather than the way this drone's view pulls."""
+    if not correction:
+        return None
+
+    def step(model: nn.Module) -> None:
+        with torch.no_grad():
+            for name, p in model.named_parameters():
+                if name not in correction:
+                    raise ValueError(f"control variates lack parameter {name!r}")
+                p.sub_(lr * torch.as_tensor(correction[name], dtype=p.dtype))
+
+    return step
+
+
+def parameters_of(model: nn.Module) -> dict[str, np.ndarray]:
+    """The trainable arrays (what control variates cover; GroupNorm has no buffers)."""
+    return {n: p.detach().cpu().numpy().copy() for n, p in model.named_parameters()}
+
+
+def next_control(
+    own: dict[str, np.ndarray] | None,
+    fleet: dict[str, np.ndarray] | None,
+    start: dict[str, np.ndarray],
+    end: dict[str, np.ndarray],
+    steps: int,
+    lr: float,
+) -> dict[str, np.ndarray]:
+    """SCAFFOLD's control variate update, "option II": c_i+ = c_i - c + (x - y_i) / (K lr),
+    the drone's mean step over its K steps from the fleet's weights x to its own y_i,
+    less the correction it applied (absent variates count as zero)."""
+    out: dict[str, np.ndarray] = {}
+    for k, x in start.items():
+        drift = (x - end[k]) / (max(steps, 1) * lr)
+        applied = (fleet[k] if fleet else 0.0) - (own[k] if own else 0.0)
+        out[k] = (drift - applied).astype(np.float32)
+    return out
+
+
 @dataclass
 class LocalResult:
     """What a drone reports after its local epochs (no data, only numbers)."""
@@ -99,6 +142,8 @@ class LocalResult:
     val_accuracy: float
     epochs: int
     seconds: float
+    steps: int  # optimiser steps up to the weights kept (the best epoch's)
+    lr: float  # the round's starting learning rate
 
 
 def train_local(
@@ -109,10 +154,12 @@ def train_local(
     cfg: FLConfig,
     server_round: int,
     partition_id: int,
+    correction: dict[str, np.ndarray] | None = None,
 ) -> LocalResult:
     """The paper's local step: `local_epochs` epochs of the centralised loop (AdamW,
     ReduceLROnPlateau, early stopping with best weights, gradient clipping), seeded per
-    round and drone, with FedProx's proximal term when the strategy asks for it. The
+    round and drone, with FedProx's proximal term or SCAFFOLD's `correction` (c - c_i)
+    when the strategy asks for it. The
     starting learning rate decays by `lr_decay` per round, standing in for the decay the
     centralised run's ReduceLROnPlateau brings over many epochs."""
     t0 = time.perf_counter()
@@ -136,8 +183,10 @@ def train_local(
         val_w if len(val_w) else None,
         tc,
         penalty=proximal_penalty(model, mu),
+        after_step=control_step(correction, tc.lr),
     )
     best = min(history, key=lambda h: h.val_loss)
+    kept = len(chosen_schedule(history, tc.lr)) if len(val_w) else len(history)
     return LocalResult(
         num_examples=len(fit_w),
         train_loss=float(history[-1].train_loss),
@@ -145,6 +194,8 @@ def train_local(
         val_accuracy=float(best.val_accuracy),
         epochs=len(history),
         seconds=time.perf_counter() - t0,
+        steps=kept * -(-len(fit_w) // tc.batch_size),
+        lr=tc.lr,
     )
 
 

@@ -182,6 +182,7 @@ def _train_epoch(
     rng: np.random.Generator,
     penalty: Callable[[nn.Module], torch.Tensor] | None = None,
     source: CaptureSource | None = None,
+    after_step: Callable[[nn.Module], None] | None = None,
 ) -> float:
     """One epoch over freshly augmented windows; returns the mean training loss."""
     x, y = augmented(pipeline, metric, train, cfg, rng, source)
@@ -196,6 +197,8 @@ def _train_epoch(
         (loss + penalty(model) if penalty is not None else loss).backward()
         nn.utils.clip_grad_norm_(model.parameters(), cfg.clip_norm)
         opt.step()
+        if after_step is not None:
+            after_step(model)
         total += loss.item() * len(idx)
     return total / max(len(order), 1)
 
@@ -224,11 +227,13 @@ def fit(
     penalty: Callable[[nn.Module], torch.Tensor] | None = None,
     source: CaptureSource | None = None,
     val_source: CaptureSource | None = None,
+    after_step: Callable[[nn.Module], None] | None = None,
 ) -> list[EpochLog]:
     """Train `model` in place; with `val`, stop early and restore the best weights.
 
     The pipeline must already be fitted. `penalty(model)`, if given, is added to every
-    batch's loss (federated clients use it for FedProx's proximal term). `source` and
+    batch's loss (federated clients use it for FedProx's proximal term); `after_step`
+    runs after every optimiser step (SCAFFOLD's drift correction). `source` and
     `val_source` hold the rows before each window for capture augmentation (robust.py;
     without them the frame-rate and loss effects are off). Returns one log entry per epoch.
     """
@@ -247,7 +252,7 @@ def fit(
     for epoch in range(1, cfg.epochs + 1):
         t0 = time.perf_counter()
         train_loss = _train_epoch(
-            model, opt, loss_fn, pipeline, metric, train, cfg, rng, penalty, source
+            model, opt, loss_fn, pipeline, metric, train, cfg, rng, penalty, source, after_step
         )
         if xv is not None:
             val_loss, val_acc = evaluate_loss(model, xv, val.labels)  # type: ignore[union-attr]

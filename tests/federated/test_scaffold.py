@@ -1,0 +1,132 @@
+"""SCAFFOLD: the drift correction's gradient, the control variates' screening, and one
+drone's two rounds through the real ClientApp and the Scaffold strategy on LASER data."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fl_helpers import fast_config
+from flwr.app import Array, ArrayRecord, ConfigRecord, Context, MetricRecord, RecordDict
+from flwr.supercore.task_identity import TaskIdentity
+
+from proxima.federated import client_app
+from proxima.federated.data import drone_data
+from proxima.federated.strategy import Scaffold, check_update
+from proxima.federated.task import (
+    control_step,
+    new_model,
+    next_control,
+    parameters_of,
+    train_local,
+)
+
+
+def test_the_correction_moves_every_step_by_lr_times_c_minus_ci() -> None:
+    model, _ = new_model(fast_config(strategy="scaffold"))
+    before = parameters_of(model)
+    rng = np.random.default_rng(0)
+    corr = {n: rng.normal(size=v.shape).astype(np.float32) for n, v in before.items()}
+    step = control_step(corr, lr=0.01)
+    assert step is not None and control_step(None, 0.01) is None
+    step(model)
+    after = parameters_of(model)
+    for n in before:
+        assert np.allclose(before[n] - after[n], 0.01 * corr[n], atol=1e-6)
+    with pytest.raises(ValueError, match="lack parameter"):
+        control_step({"stem.0.weight": corr["stem.0.weight"]}, 0.01)(model)  # type: ignore[misc]
+
+
+def test_a_drones_control_variate_is_its_mean_step_less_the_correction() -> None:
+    """Option II on a real local round: with no variates yet c_i = (x - y_i) / (K lr);
+    with them, the correction the drone applied is taken back out."""
+    cfg = fast_config(strategy="scaffold")
+    data = drone_data(cfg, 0, "front")
+    model, pipeline = new_model(cfg)
+    start = parameters_of(model)
+    res = train_local(model, pipeline, data.fit, data.val, cfg, 1, 0)
+    end = parameters_of(model)
+    assert res.steps == -(-len(data.fit) // cfg.batch_size) * res.epochs  # 1 epoch, kept
+    c1 = next_control(None, None, start, end, res.steps, res.lr)
+    for n in start:
+        assert np.allclose(c1[n], (start[n] - end[n]) / (res.steps * res.lr), atol=1e-6)
+    fleet = {n: np.ones_like(v) for n, v in c1.items()}
+    c2 = next_control(c1, fleet, start, end, res.steps, res.lr)
+    assert all(np.allclose(c2[n], 2 * c1[n] - 1, atol=1e-5) for n in c1)
+
+
+def _metrics(n: float = 100) -> MetricRecord:
+    return MetricRecord({"num-examples": n, "train_loss": 1.0, "val_loss": 1.0,
+                         "val_accuracy": 0.5, "seconds": 1.0})  # fmt: skip
+
+
+def test_screening_checks_the_control_record() -> None:
+    model, _ = new_model(fast_config())
+    weights = {k: v.numpy().copy() for k, v in model.state_dict().items()}
+    reference = {k: tuple(v.shape) for k, v in weights.items()}
+
+    def reply(control: dict[str, np.ndarray] | None) -> RecordDict:
+        rd = RecordDict({"arrays": ArrayRecord({k: Array(v) for k, v in weights.items()}),
+                         "metrics": _metrics()})  # fmt: skip
+        if control is not None:
+            rd["control"] = ArrayRecord({k: Array(v) for k, v in control.items()})
+        return rd
+
+    first = next(iter(weights))
+    assert check_update(reply({first: weights[first]}), reference, control=True) is None
+    assert "without its 'control'" in check_update(reply(None), reference, control=True)
+    nan = np.full_like(weights[first], np.nan)
+    assert "non-finite" in check_update(reply({first: nan}), reference, control=True)
+    assert "does not match" in check_update(reply({"extra": nan}), reference, control=True)
+    # FedAvg's screening is unchanged: one ArrayRecord only
+    assert "one ArrayRecord" in check_update(reply({first: weights[first]}), reference)
+
+
+class _Grid:
+    """The two calls FedAvg's sampling makes of Flower's Grid."""
+
+    def __init__(self, nodes: list[int]) -> None:
+        self.nodes = nodes
+
+    def get_node_ids(self) -> list[int]:
+        return list(self.nodes)
+
+
+@pytest.fixture
+def task_identity():
+    """Flower builds messages inside a running app; stand in for its process identity."""
+    saved = (TaskIdentity._run_id, TaskIdentity._node_id, TaskIdentity._task_id)
+    TaskIdentity.run_id, TaskIdentity.node_id, TaskIdentity.task_id = 1, 1, 1
+    yield
+    TaskIdentity._run_id, TaskIdentity._node_id, TaskIdentity._task_id = saved
+
+
+def test_two_rounds_of_one_drone_through_the_client_app_and_strategy(task_identity) -> None:
+    cfg = fast_config(strategy="scaffold")
+    model, _ = new_model(cfg)
+    arrays = ArrayRecord(model.state_dict())
+    config = ConfigRecord(cfg.to_run_config())
+    strategy = Scaffold(min_train_nodes=1, min_available_nodes=1)
+    context = Context(run_id=1, node_id=7, node_config={"partition-id": 0, "num-partitions": 3},
+                      state=RecordDict(), run_config={})  # fmt: skip
+
+    (first,) = strategy.configure_train(1, arrays, config, _Grid([7]))  # type: ignore[arg-type]
+    assert "control" not in first.content.array_records  # no fleet control before round 1
+    reply = client_app.train(first, context)
+    own = {k: a.numpy() for k, a in context.state.array_records["scaffold-control"].items()}
+    sent = {k: a.numpy() for k, a in reply.content.array_records["control"].items()}
+    assert own.keys() == sent.keys() and all(np.array_equal(own[k], sent[k]) for k in own)
+    assert any(np.abs(v).sum() > 0 for v in own.values())
+
+    new_arrays, _ = strategy.aggregate_train(1, [reply])
+    assert new_arrays is not None and "control" not in reply.content.array_records
+    fleet = strategy.fleet_control()
+    assert fleet is not None and all(np.allclose(fleet[k], own[k]) for k in own)
+
+    (second,) = strategy.configure_train(2, new_arrays, config, _Grid([7]))  # type: ignore[arg-type]
+    assert set(second.content.array_records) == {"arrays", "control"}
+    fleet_sent, own_kept = client_app._controls(second, context)
+    assert fleet_sent is not None and own_kept is not None
+    assert all(np.allclose(fleet_sent[k], own_kept[k], atol=1e-6) for k in own)  # one drone
+    reply2 = client_app.train(second, context)
+    shapes = {k: tuple(v.shape) for k, v in model.state_dict().items()}
+    assert check_update(reply2.content, shapes, control=True) is None
