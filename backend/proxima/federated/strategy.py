@@ -306,8 +306,7 @@ class Scaffold(FedAvg):
         total = sum(n for n, _ in self.controls.values())
         keys = next(iter(self.controls.values()))[1].keys()
         return {
-            k: np.sum([n * c[k] for n, c in self.controls.values()], axis=0) / total
-            for k in keys
+            k: np.sum([n * c[k] for n, c in self.controls.values()], axis=0) / total for k in keys
         }
 
     def configure_train(
