@@ -159,6 +159,7 @@ def train(msg: Message, context: Context) -> Message:
 
 
 def arrays_of(named: dict[str, np.ndarray]) -> ArrayRecord:
+    """Named numpy arrays as Flower's ArrayRecord."""
     return ArrayRecord({k: Array(np.ascontiguousarray(v)) for k, v in named.items()})
 
 

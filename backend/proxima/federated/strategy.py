@@ -288,11 +288,12 @@ def _f(value: Any) -> float | None:
 
 class Scaffold(FedAvg):
     """FedAvg plus SCAFFOLD's control variates (Karimireddy et al. 2020), for drones that
-    each see one view: every drone replies with its loss gradient at the fleet's weights
-    (c_i, under "control"); the fleet's c is their sample-weighted average over each
-    drone's latest c_i, sent with the next round's weights; each drone adds c - c_i to
-    its local gradients (`task.control_penalty`). Only gradients leave a drone, the same
-    size as the weights it already sends."""
+    each see one view: every drone replies with its control variate c_i (its mean AdamW
+    step of the round, `task.next_control`, under "control"); the fleet's c is the
+    sample-weighted average of each drone's latest c_i, sent with the next round's
+    weights; each drone then corrects every local step by -lr (c - c_i)
+    (`task.control_step`). What leaves a drone is the size of the weights it already
+    sends, and no data."""
 
     uses_control = True
 
