@@ -14,22 +14,22 @@ from proxima.federated.data import drone_data
 from proxima.federated.strategy import Scaffold, check_update
 from proxima.federated.task import (
     control_step,
+    get_weights,
     new_model,
     next_control,
-    parameters_of,
     train_local,
 )
 
 
 def test_the_correction_moves_every_step_by_lr_times_c_minus_ci() -> None:
     model, _ = new_model(fast_config(strategy="scaffold"))
-    before = parameters_of(model)
+    before = get_weights(model)
     rng = np.random.default_rng(0)
     corr = {n: rng.normal(size=v.shape).astype(np.float32) for n, v in before.items()}
     step = control_step(corr, lr=0.01)
     assert step is not None and control_step(None, 0.01) is None
     step(model)
-    after = parameters_of(model)
+    after = get_weights(model)
     for n in before:
         assert np.allclose(before[n] - after[n], 0.01 * corr[n], atol=1e-6)
     with pytest.raises(ValueError, match="lack parameter"):
@@ -42,15 +42,15 @@ def test_a_drones_control_variate_is_its_mean_step_less_the_correction() -> None
     cfg = fast_config(strategy="scaffold")
     data = drone_data(cfg, 0, "front")
     model, pipeline = new_model(cfg)
-    start = parameters_of(model)
+    start = get_weights(model)
     res = train_local(model, pipeline, data.fit, data.val, cfg, 1, 0)
-    end = parameters_of(model)
+    end = get_weights(model)
     assert res.steps == -(-len(data.fit) // cfg.batch_size) * res.epochs  # 1 epoch, kept
-    c1 = next_control(None, None, start, end, res.steps, res.lr)
+    c1 = next_control(start, end, res.steps, res.lr, None)
     for n in start:
         assert np.allclose(c1[n], (start[n] - end[n]) / (res.steps * res.lr), atol=1e-6)
-    fleet = {n: np.ones_like(v) for n, v in c1.items()}
-    c2 = next_control(c1, fleet, start, end, res.steps, res.lr)
+    correction = {n: 1 - v for n, v in c1.items()}  # a fleet's c of 1 less c_i
+    c2 = next_control(start, end, res.steps, res.lr, correction)
     assert all(np.allclose(c2[n], 2 * c1[n] - 1, atol=1e-5) for n in c1)
 
 
@@ -124,9 +124,9 @@ def test_two_rounds_of_one_drone_through_the_client_app_and_strategy(task_identi
 
     (second,) = strategy.configure_train(2, new_arrays, config, _Grid([7]))  # type: ignore[arg-type]
     assert set(second.content.array_records) == {"arrays", "control"}
-    fleet_sent, own_kept = client_app._controls(second, context)
-    assert fleet_sent is not None and own_kept is not None
-    assert all(np.allclose(fleet_sent[k], own_kept[k], atol=1e-6) for k in own)  # one drone
+    correction = client_app._correction(second, context)
+    assert correction is not None
+    assert all(np.allclose(correction[k], 0, atol=1e-6) for k in own)  # one drone: c == c_i
     reply2 = client_app.train(second, context)
     shapes = {k: tuple(v.shape) for k, v in model.state_dict().items()}
     assert check_update(reply2.content, shapes, control=True) is None

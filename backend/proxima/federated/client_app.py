@@ -13,16 +13,18 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from flwr.app import Array, ArrayRecord, ConfigRecord, Context, Message, MetricRecord, RecordDict
+from flwr.app import ArrayRecord, ConfigRecord, Context, Message, MetricRecord, RecordDict
 from flwr.clientapp import ClientApp
 
 from proxima.federated.config import FLConfig, default_drone_name
 from proxima.federated.data import DroneData, drone_data
 from proxima.federated.task import (
     Scorer,
+    arrays_of,
+    get_weights,
+    named_arrays,
     new_model,
     next_control,
-    parameters_of,
     set_weights,
     train_local,
 )
@@ -101,7 +103,7 @@ def _local(msg: Message, context: Context) -> tuple[FLConfig, Node, DroneData]:
 
 def _arrays(msg: Message) -> dict[str, np.ndarray]:
     """The global weights a message carries, as numpy arrays."""
-    return {k: a.numpy() for k, a in msg.content.array_records["arrays"].items()}
+    return named_arrays(msg.content.array_records["arrays"])
 
 
 def _int(value: object) -> int:
@@ -134,16 +136,15 @@ def train(msg: Message, context: Context) -> Message:
     set_weights(model, _arrays(msg))
     server_round = _int(msg.content.config_records["config"].get("server-round", 0))
     scaffold = cfg.strategy == "scaffold"
-    fleet, own = _controls(msg, context) if scaffold else (None, None)
-    start = parameters_of(model)
-    correction = {k: v - (own or {}).get(k, 0.0) for k, v in fleet.items()} if fleet else None
+    correction = _correction(msg, context) if scaffold else None
+    start = get_weights(model)
     res = train_local(
         model, pipeline, data.fit, data.val, cfg, server_round, node.partition_id, correction
     )
     control = None
     if scaffold:
-        control = next_control(own, fleet, start, parameters_of(model), res.steps, res.lr)
-        context.state[_OWN_CONTROL] = arrays_of(control)
+        control = arrays_of(next_control(start, get_weights(model), res.steps, res.lr, correction))
+        context.state[_OWN_CONTROL] = control
     metrics = {
         "num-examples": res.num_examples,
         "train_loss": res.train_loss,
@@ -154,28 +155,19 @@ def train(msg: Message, context: Context) -> Message:
     }
     reply = _reply(msg, node, data, ArrayRecord(model.state_dict()), metrics)
     if control is not None:
-        reply.content[CONTROL] = arrays_of(control)
+        reply.content[CONTROL] = control
     return reply
 
 
-def arrays_of(named: dict[str, np.ndarray]) -> ArrayRecord:
-    """Named numpy arrays as Flower's ArrayRecord."""
-    return ArrayRecord({k: Array(np.ascontiguousarray(v)) for k, v in named.items()})
-
-
-def _controls(
-    msg: Message, context: Context
-) -> tuple[dict[str, np.ndarray] | None, dict[str, np.ndarray] | None]:
-    """(the fleet's c from the message, this drone's c_i from its state); None before
-    the first round has made one (a drone that joins later starts with c_i = 0)."""
-
-    def named(record: ArrayRecord | None) -> dict[str, np.ndarray] | None:
-        return {k: a.numpy() for k, a in record.items()} if record is not None else None
-
-    return (
-        named(msg.content.array_records.get(CONTROL)),
-        named(context.state.array_records.get(_OWN_CONTROL)),
-    )
+def _correction(msg: Message, context: Context) -> dict[str, np.ndarray] | None:
+    """c - c_i: the fleet's variate from the message less this drone's from its state;
+    None before the first round has made one (a drone that joins later has c_i = 0)."""
+    fleet = msg.content.array_records.get(CONTROL)
+    if fleet is None:
+        return None
+    own = context.state.array_records.get(_OWN_CONTROL)
+    mine = named_arrays(own) if own is not None else {}
+    return {k: v - mine.get(k, 0.0) for k, v in named_arrays(fleet).items()}
 
 
 @app.evaluate()

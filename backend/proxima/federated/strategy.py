@@ -23,11 +23,12 @@ from collections.abc import Iterable
 from typing import Any, Protocol
 
 import numpy as np
-from flwr.app import Array, ArrayRecord, ConfigRecord, Message, MetricRecord
+from flwr.app import ArrayRecord, ConfigRecord, Message, MetricRecord
 from flwr.serverapp import Grid
 from flwr.serverapp.strategy import FedAdam, FedAvg, FedAvgM, FedProx
 
 from proxima.federated.config import FLConfig
+from proxima.federated.task import arrays_of, named_arrays
 
 REQUIRED_METRICS = ("num-examples", "train_loss", "val_loss", "val_accuracy", "seconds")
 
@@ -316,7 +317,7 @@ class Scaffold(FedAvg):
         messages = list(super().configure_train(server_round, arrays, config, grid))
         fleet = self.fleet_control()
         if fleet is not None:
-            record = ArrayRecord({k: Array(np.asarray(v, np.float32)) for k, v in fleet.items()})
+            record = arrays_of(fleet)
             for msg in messages:  # Flower's messages share one RecordDict
                 msg.content["control"] = record
         return messages
@@ -331,7 +332,7 @@ class Scaffold(FedAvg):
             record = msg.content.array_records["control"]
             del msg.content["control"]
             n = float(next(iter(msg.content.metric_records.values()))["num-examples"])  # type: ignore[arg-type]
-            self.controls[msg.metadata.src_node_id] = (n, {k: a.numpy() for k, a in record.items()})
+            self.controls[msg.metadata.src_node_id] = (n, named_arrays(record))
         return super().aggregate_train(server_round, replies)
 
 

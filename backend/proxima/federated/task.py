@@ -7,12 +7,14 @@ wrappers around these functions.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import torch
+from flwr.app import Array, ArrayRecord
 from torch import nn
 
 from proxima.federated.config import ConfigError, FLConfig
@@ -53,6 +55,16 @@ def start_model(cfg: FLConfig) -> tuple[nn.Module, Pipeline]:
 
 def get_weights(model: nn.Module) -> dict[str, np.ndarray]:
     return {k: v.detach().cpu().numpy().copy() for k, v in model.state_dict().items()}
+
+
+def named_arrays(record: ArrayRecord) -> dict[str, np.ndarray]:
+    """Flower's ArrayRecord as named numpy arrays."""
+    return {k: a.numpy() for k, a in record.items()}
+
+
+def arrays_of(named: dict[str, np.ndarray]) -> ArrayRecord:
+    """Named numpy arrays as Flower's ArrayRecord."""
+    return ArrayRecord({k: Array(np.ascontiguousarray(v, np.float32)) for k, v in named.items()})
 
 
 def set_weights(model: nn.Module, weights: dict[str, np.ndarray]) -> None:
@@ -108,28 +120,23 @@ def control_step(
     return step
 
 
-def parameters_of(model: nn.Module) -> dict[str, np.ndarray]:
-    """The trainable arrays (what control variates cover; GroupNorm has no buffers)."""
-    return {n: p.detach().cpu().numpy().copy() for n, p in model.named_parameters()}
-
-
 def next_control(
-    own: dict[str, np.ndarray] | None,
-    fleet: dict[str, np.ndarray] | None,
     start: dict[str, np.ndarray],
     end: dict[str, np.ndarray],
     steps: int,
     lr: float,
+    correction: dict[str, np.ndarray] | None,
 ) -> dict[str, np.ndarray]:
     """SCAFFOLD's control variate update, "option II": c_i+ = c_i - c + (x - y_i) / (K lr),
     the drone's mean step over its K steps from the fleet's weights x to its own y_i,
-    less the correction it applied (absent variates count as zero)."""
-    out: dict[str, np.ndarray] = {}
-    for k, x in start.items():
-        drift = (x - end[k]) / (max(steps, 1) * lr)
-        applied = (fleet[k] if fleet else 0.0) - (own[k] if own else 0.0)
-        out[k] = (drift - applied).astype(np.float32)
-    return out
+    less the correction c - c_i it applied (None: none yet). The models' state dicts are
+    their parameters (GroupNorm, no buffers), so weights and variates share keys."""
+    return {
+        k: ((x - end[k]) / (max(steps, 1) * lr) - (correction[k] if correction else 0.0)).astype(
+            np.float32
+        )
+        for k, x in start.items()
+    }
 
 
 @dataclass
@@ -194,7 +201,7 @@ def train_local(
         val_accuracy=float(best.val_accuracy),
         epochs=len(history),
         seconds=time.perf_counter() - t0,
-        steps=kept * -(-len(fit_w) // tc.batch_size),
+        steps=kept * math.ceil(len(fit_w) / tc.batch_size),
         lr=tc.lr,
     )
 
