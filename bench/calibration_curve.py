@@ -100,15 +100,12 @@ def evaluate_point(
 def run_group(args: argparse.Namespace) -> None:
     import torch
 
-    from proxima.gesture import workflow
     from proxima.gesture.classifier import GestureClassifier
     from proxima.gesture.datasets import load_data
     from proxima.gesture.train import TrainConfig
     from proxima.gesture.workflow import train_model
 
     torch.set_num_threads(args.threads)
-    if args.share is not None:  # a variant of the calibration's share of each epoch
-        workflow.CALIBRATION_SHARE = args.share
     data_name, splits = GROUPS[args.group]
     splits = tuple(args.split) if args.split else splits
     data = load_data([data_name])
@@ -117,13 +114,17 @@ def run_group(args: argparse.Namespace) -> None:
     result.setdefault("config", {}).update(
         epochs=args.epochs, patience=args.patience, tune_epochs=args.tune_epochs,
         threads=args.threads, seed=args.seed, data=data_name, pipeline=args.pipeline,
-        share=workflow.CALIBRATION_SHARE,
+        share=args.share,
         pretrain=str(args.pretrain) if args.pretrain else None,
     )  # fmt: skip
     points = result.setdefault("points", [])
     RUNS.mkdir(parents=True, exist_ok=True)
     base_cfg = TrainConfig(
-        epochs=args.epochs, patience=args.patience, threads=args.threads, seed=args.seed
+        epochs=args.epochs,
+        patience=args.patience,
+        threads=args.threads,
+        seed=args.seed,
+        calibration_share=args.share,
     )
     tune_cfg = replace(base_cfg, epochs=args.tune_epochs)
 
@@ -301,9 +302,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="the group's JSON (default: bench/results/calibration-curve."
         "<group><tag>.json, which --merge reads; a variant goes elsewhere)",
     )
-    ap.add_argument("--share", type=float, default=None,
+    ap.add_argument("--share", type=float, default=0.5,
                     help="the calibration clips' share of each epoch (default: "
-                    "proxima.gesture.workflow.CALIBRATION_SHARE)")  # fmt: skip
+                    "TrainConfig.calibration_share, 0.5)")  # fmt: skip
     ap.add_argument("--pipeline", default=None, help="body (default) or body-image")
     ap.add_argument("--pretrain", type=Path, default=None,
                     help="inner models start from this checkpoint (e.g. the synthetic "

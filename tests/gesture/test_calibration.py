@@ -150,3 +150,23 @@ def test_fine_tune_the_inner_model_and_score_the_remainder(
         [split], "tcn", [str(uav_dir)], TrainConfig(epochs=1, stride=20, threads=1)
     )
     assert rows[0]["split"] == split and rows[0]["windows"] == m["windows"]
+
+
+def test_the_calibration_share_sets_how_often_its_clips_repeat(laser_clips) -> None:
+    from proxima.gesture.workflow import calibration_fit_parts
+
+    parts = split_clips(laser_clips, "calibrate:cross-view:l:5")
+    calib = {id(c) for c in parts.calibration}
+    n = {}
+    for share in (0.25, 0.5, 0.75):
+        fit, val, _ = calibration_fit_parts(parts, stride=4, max_gap=5, share=share)
+        n_calib = len(make_windows([c for c in fit if id(c) in calib], stride=4))
+        n[share] = n_calib / len(make_windows(fit, stride=4))
+        assert not any(id(c) in calib for c in val)  # validation never holds them
+    # each share lands near its target (whole repeats round it) and they order as asked
+    assert n[0.25] < n[0.5] < n[0.75]
+    for share, got in n.items():
+        assert abs(got - share) < 0.1, (share, got)
+    for bad in (0.0, 1.0, -0.5):
+        with pytest.raises(DataError, match="calibration share"):
+            calibration_fit_parts(parts, stride=4, max_gap=5, share=bad)

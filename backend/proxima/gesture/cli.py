@@ -73,6 +73,13 @@ def train(
             "CONDITION:LEVEL:SHARE,... [default: clean:1:0.2,field:1:0.4,field:2:0.4]"
         ),
     ] = None,
+    calibration_share: Annotated[
+        float,
+        typer.Option(
+            help="With a calibrate:SPLIT:SECONDS split: the calibration clips' share of each "
+            "epoch (repeated to make it; 0 < share < 1)."
+        ),
+    ] = 0.5,
     refit: Annotated[
         bool,
         typer.Option(
@@ -98,7 +105,8 @@ def train(
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
                       seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
-                      transitions=transitions, refit=refit, augment=augment)  # fmt: skip
+                      transitions=transitions, refit=refit, augment=augment,
+                      calibration_share=calibration_share)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     if capture_mix is not None:

@@ -62,6 +62,8 @@ class TrainConfig:
     # Euro filter (gesture/robust.py); "none": the recordings as they are, unfiltered.
     augment: str = "capture"
     capture_mix: list = field(default_factory=lambda: [list(m) for m in CAPTURE_MIX])
+    # With a calibrate: split, the calibration clips' share of each epoch (workflow.py).
+    calibration_share: float = 0.5
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:

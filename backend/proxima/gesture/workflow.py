@@ -39,11 +39,10 @@ from proxima.gesture.windows import (
 )
 
 # A calibration's few windows (5 s of each clip: about 300 against 4,300 of the inner
-# split's training part) are repeated to make about this share of each epoch; each copy
-# is augmented afresh, so the repeats are not identical. Half (with 12 fine-tuning
-# epochs) beat a quarter (6 epochs) on 5 of 6 unseen views and people, by 2 points on
-# average (docs/experiments.md, "Calibration with capture-trained models").
-CALIBRATION_SHARE = 0.5
+# split's training part) are repeated to make about `TrainConfig.calibration_share` of
+# each epoch; each copy is augmented afresh, so the repeats are not identical. Half (with
+# 12 fine-tuning epochs) beat a quarter (6 epochs) on 5 of 6 unseen views and people, by
+# 2 points on average (docs/experiments.md, "Calibration with capture-trained models").
 # Fine-tuning (`init`) trains at this fraction of the configured learning rate.
 FINE_TUNE_LR = 0.25
 
@@ -71,13 +70,20 @@ def fit_and_validation_windows(
     return fit_w, make_windows(val_parts, WINDOW, stride, max_gap, names)
 
 
-def calibration_parts(
-    parts: SplitParts, stride: int, max_gap: int
+def calibration_fit_parts(
+    parts: SplitParts, stride: int, max_gap: int, share: float = 0.5
 ) -> tuple[list[Clip], list[Clip], int]:
     """(fit parts, validation parts, repeats) of a `calibrate:` split: the inner split's
     training part splits into fit and validation tails as always; the calibration parts
-    (too short to lose a tail) only fit, repeated `repeats` times (`CALIBRATION_SHARE`).
-    Validation therefore holds no frame of the held-out clips."""
+    (too short to lose a tail) only fit, repeated `repeats` times to make about `share`
+    (0 < share < 1) of the fit windows. Validation therefore holds no frame of the
+    held-out clips.
+
+    Raises:
+        DataError: `share` outside (0, 1).
+    """
+    if not 0.0 < share < 1.0:
+        raise DataError(f"calibration share {share:g}: must lie between 0 and 1 (exclusive)")
     calib_ids = {id(c) for c in parts.calibration}
     inner = [c for c in parts.train if id(c) not in calib_ids]
     fit_parts, val_parts = validation_parts(inner, WINDOW)
@@ -85,18 +91,8 @@ def calibration_parts(
     n_calib = len(make_windows(parts.calibration, WINDOW, stride, max_gap))
     repeats = 1
     if n_calib:
-        repeats = max(1, round(CALIBRATION_SHARE * n_inner / ((1 - CALIBRATION_SHARE) * n_calib)))
+        repeats = max(1, round(share * n_inner / ((1 - share) * n_calib)))
     return list(fit_parts) + list(parts.calibration) * repeats, list(val_parts), repeats
-
-
-def calibration_fit_windows(
-    parts: SplitParts, stride: int, max_gap: int
-) -> tuple[Windows, Windows, int]:
-    """(fit, validation, repeats) windows of a `calibrate:` split (`calibration_parts`)."""
-    fit_parts, val_parts, repeats = calibration_parts(parts, stride, max_gap)
-    names: list[str] = []
-    fit_w = make_windows(fit_parts, WINDOW, stride, max_gap, names)
-    return fit_w, make_windows(val_parts, WINDOW, stride, max_gap, names), repeats
 
 
 def load_init(path: str | Path, split: str, model_name: str) -> GestureClassifier:
@@ -161,7 +157,9 @@ def train_model(
     train = parts.train
     repeats = 0
     if parts.calibration:
-        fit_parts, val_parts, repeats = calibration_parts(parts, cfg.stride, cfg.max_gap)
+        fit_parts, val_parts, repeats = calibration_fit_parts(
+            parts, cfg.stride, cfg.max_gap, cfg.calibration_share
+        )
     else:
         fit_parts, val_parts = validation_parts(train, WINDOW)
     names: list[str] = []
