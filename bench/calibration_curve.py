@@ -111,21 +111,19 @@ def run_group(args: argparse.Namespace) -> None:
     data = load_data([data_name])
     out = args.out or RESULTS / f"calibration-curve.{args.group}{args.tag}.json"
     result: dict[str, Any] = json.loads(out.read_text()) if out.exists() and args.resume else {}
+    base_cfg = TrainConfig(
+        epochs=args.epochs, patience=args.patience, threads=args.threads, seed=args.seed
+    )
+    if args.share is not None:  # a variant of the calibration's share of each epoch
+        base_cfg.calibration_share = args.share
     result.setdefault("config", {}).update(
         epochs=args.epochs, patience=args.patience, tune_epochs=args.tune_epochs,
         threads=args.threads, seed=args.seed, data=data_name, pipeline=args.pipeline,
-        share=args.share,
+        share=base_cfg.calibration_share,
         pretrain=str(args.pretrain) if args.pretrain else None,
     )  # fmt: skip
     points = result.setdefault("points", [])
     RUNS.mkdir(parents=True, exist_ok=True)
-    base_cfg = TrainConfig(
-        epochs=args.epochs,
-        patience=args.patience,
-        threads=args.threads,
-        seed=args.seed,
-        calibration_share=args.share,
-    )
     tune_cfg = replace(base_cfg, epochs=args.tune_epochs)
 
     def save() -> None:
@@ -302,9 +300,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="the group's JSON (default: bench/results/calibration-curve."
         "<group><tag>.json, which --merge reads; a variant goes elsewhere)",
     )
-    ap.add_argument("--share", type=float, default=0.5,
+    ap.add_argument("--share", type=float, default=None,
                     help="the calibration clips' share of each epoch (default: "
-                    "TrainConfig.calibration_share, 0.5)")  # fmt: skip
+                    "TrainConfig.calibration_share)")  # fmt: skip
     ap.add_argument("--pipeline", default=None, help="body (default) or body-image")
     ap.add_argument("--pretrain", type=Path, default=None,
                     help="inner models start from this checkpoint (e.g. the synthetic "

@@ -110,6 +110,11 @@ def test_the_cli_names_a_bad_field(laser_dir, tmp_path) -> None:
     result = CliRunner().invoke(app, [*args, "--split", "calibrate:cross-view:l:x"])
     assert result.exit_code == 2
     assert "seconds field 'x' is not a number" in result.output
+    result = CliRunner().invoke(
+        app, [*args, "--split", "calibrate:cross-view:l:5", "--calibration-share", "1.5"]
+    )
+    assert result.exit_code == 2
+    assert "calibration share 1.5: must lie between 0 and 1" in result.output
 
 
 @pytest.mark.slow

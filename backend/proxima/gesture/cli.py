@@ -74,12 +74,12 @@ def train(
         ),
     ] = None,
     calibration_share: Annotated[
-        float,
+        float | None,
         typer.Option(
             help="With a calibrate:SPLIT:SECONDS split: the calibration clips' share of each "
-            "epoch (repeated to make it; 0 < share < 1)."
+            "epoch (repeated to make it; 0 < share < 1). [default: 0.5]"
         ),
-    ] = 0.5,
+    ] = None,
     refit: Annotated[
         bool,
         typer.Option(
@@ -105,10 +105,11 @@ def train(
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
                       seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
-                      transitions=transitions, refit=refit, augment=augment,
-                      calibration_share=calibration_share)  # fmt: skip
+                      transitions=transitions, refit=refit, augment=augment)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
+    if calibration_share is not None:
+        cfg.calibration_share = calibration_share
     if capture_mix is not None:
         from proxima.gesture.robust import parse_mix
 

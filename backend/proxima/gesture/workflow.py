@@ -38,11 +38,6 @@ from proxima.gesture.windows import (
     validation_parts,
 )
 
-# A calibration's few windows (5 s of each clip: about 300 against 4,300 of the inner
-# split's training part) are repeated to make about `TrainConfig.calibration_share` of
-# each epoch; each copy is augmented afresh, so the repeats are not identical. Half (with
-# 12 fine-tuning epochs) beat a quarter (6 epochs) on 5 of 6 unseen views and people, by
-# 2 points on average (docs/experiments.md, "Calibration with capture-trained models").
 # Fine-tuning (`init`) trains at this fraction of the configured learning rate.
 FINE_TUNE_LR = 0.25
 
@@ -71,12 +66,13 @@ def fit_and_validation_windows(
 
 
 def calibration_fit_parts(
-    parts: SplitParts, stride: int, max_gap: int, share: float = 0.5
+    parts: SplitParts, stride: int, max_gap: int, share: float
 ) -> tuple[list[Clip], list[Clip], int]:
     """(fit parts, validation parts, repeats) of a `calibrate:` split: the inner split's
     training part splits into fit and validation tails as always; the calibration parts
     (too short to lose a tail) only fit, repeated `repeats` times to make about `share`
-    (0 < share < 1) of the fit windows. Validation therefore holds no frame of the
+    (0 < share < 1) of the fit windows; each copy is augmented afresh, so the repeats
+    are not identical. Validation therefore holds no frame of the
     held-out clips.
 
     Raises:
