@@ -78,6 +78,7 @@ def centralised(
     mirror: bool,
     init: str = "",
     keep: Path | None = None,
+    seed: int = 0,
 ) -> dict[str, Any]:
     from proxima.evaluation.metrics import evaluate_checkpoint
     from proxima.gesture.train import TrainConfig
@@ -86,7 +87,7 @@ def centralised(
     out: dict[str, Any] = {"load_average_at_start": load()}
     if checkpoint is None:
         tmp = keep or Path(tempfile.mkdtemp()) / "central.pt"
-        cfg = TrainConfig(threads=1, mirror=mirror)  # augment as the drones do
+        cfg = TrainConfig(threads=1, mirror=mirror, seed=seed)  # augment as the drones do
         t0 = time.perf_counter()
         res = train_model(None, "tcn", "temporal", tmp, cfg, command="bench.federated",
                           init=init or None)  # fmt: skip
@@ -164,6 +165,7 @@ def main() -> None:
                     "synthetic operator's model, docs/synth.md)")  # fmt: skip
     ap.add_argument("--local-epochs", type=int, default=None, help="default: FLConfig's")
     ap.add_argument("--strategy", default=None, help="default: FLConfig's")
+    ap.add_argument("--seed", type=int, default=0, help="seed of both runs (FLConfig, TrainConfig)")
     ap.add_argument("--keep-central", type=Path, help="save the centralised checkpoint here")
     ap.add_argument("--out", type=Path, default=OUT, help="results JSON; the curve beside it")
     args = ap.parse_args()
@@ -173,7 +175,7 @@ def main() -> None:
     from proxima.federated.config import FLConfig
 
     torch.set_num_threads(1)
-    base = FLConfig(rounds=args.rounds, include_samples=False, init=args.init)
+    base = FLConfig(rounds=args.rounds, include_samples=False, init=args.init, seed=args.seed)
     if args.local_epochs is not None:
         base = replace(base, local_epochs=args.local_epochs)
     if args.mirror is not None:
@@ -189,9 +191,10 @@ def main() -> None:
         "local_epochs": base.local_epochs,
         "augment": base.augment,
         "strategy": base.strategy,
+        "seed": base.seed,
     }  # fmt: skip
     central = centralised(args.central_checkpoint, base.test_stride, base.mirror, args.init,
-                          args.keep_central)  # fmt: skip
+                          args.keep_central, args.seed)  # fmt: skip
     results["centralised"] = central
     print("centralised", central["accuracy"], flush=True)
     sim, _ = simulation(base, f"{args.rounds} rounds x 3 drones")

@@ -130,3 +130,23 @@ def test_two_rounds_of_one_drone_through_the_client_app_and_strategy(task_identi
     reply2 = client_app.train(second, context)
     shapes = {k: tuple(v.shape) for k, v in model.state_dict().items()}
     assert check_update(reply2.content, shapes, control=True) is None
+
+
+def test_the_server_step_scales_the_averaged_move(task_identity) -> None:
+    """eta_g = 2: the fleet's new weights are old + 2 (average - old), on a real reply."""
+    cfg = fast_config(strategy="scaffold")
+    model, _ = new_model(cfg)
+    arrays = ArrayRecord(model.state_dict())
+    old = {k: a.numpy().copy() for k, a in arrays.items()}
+    strategy = Scaffold(server_learning_rate=2.0, min_train_nodes=1, min_available_nodes=1)
+    context = Context(run_id=1, node_id=7, node_config={"partition-id": 0, "num-partitions": 3},
+                      state=RecordDict(), run_config={})  # fmt: skip
+    (msg,) = strategy.configure_train(1, arrays, ConfigRecord(cfg.to_run_config()), _Grid([7]))  # type: ignore[arg-type]
+    reply = client_app.train(msg, context)
+    local = {k: a.numpy().copy() for k, a in reply.content.array_records["arrays"].items()}
+    new_arrays, _ = strategy.aggregate_train(1, [reply])
+    assert new_arrays is not None
+    new = {k: a.numpy() for k, a in new_arrays.items()}
+    assert any(not np.allclose(local[k], old[k]) for k in old)
+    for k in old:
+        assert np.allclose(new[k], old[k] + 2 * (local[k] - old[k]), atol=1e-5)

@@ -64,7 +64,8 @@ class FLConfig:
     min_clients: MinClients = 2
     strategy: Strategy = "fedavg"
     proximal_mu: Annotated[float, Field(ge=0)] = 0.01  # FedProx only
-    server_learning_rate: Positive = 1.0  # FedAvgM only
+    # FedAvgM's, and SCAFFOLD's global step eta_g: new = old + eta_g (average - old)
+    server_learning_rate: Positive = 1.0
     server_eta: Positive = 1e-2  # FedAdam's server step size
     server_momentum: Annotated[float, Field(ge=0, lt=1)] = 0.9  # FedAvgM only
     partition: Partition = "view"
