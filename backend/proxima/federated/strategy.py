@@ -287,23 +287,22 @@ def _f(value: Any) -> float | None:
     return float(value)
 
 
-class Scaffold(FedAvg):
+class Scaffold(FedAvgM):
     """FedAvg plus SCAFFOLD's control variates (Karimireddy et al. 2020), for drones that
     each see one view: every drone replies with its control variate c_i (its mean AdamW
     step of the round, `task.next_control`, under "control"); the fleet's c is the
     sample-weighted average of each drone's latest c_i, sent with the next round's
     weights; each drone then corrects every local step by -lr (c - c_i)
     (`task.control_step`). What leaves a drone is the size of the weights it already
-    sends, and no data. `server_learning_rate` is SCAFFOLD's global step eta_g: the new
-    weights are old + eta_g (average - old); 1 keeps the plain average."""
+    sends, and no data. SCAFFOLD's global step eta_g is Flower's FedAvgM server step
+    (`server_learning_rate`, no momentum): the new weights are old + eta_g (average -
+    old); 1 keeps the plain average."""
 
     uses_control = True
 
-    def __init__(self, server_learning_rate: float = 1.0, **kwargs: Any) -> None:
+    def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.controls: dict[int, tuple[float, dict[str, np.ndarray]]] = {}
-        self.server_learning_rate = server_learning_rate
-        self.sent_weights: dict[str, np.ndarray] = {}
 
     def fleet_control(self) -> dict[str, np.ndarray] | None:
         if not self.controls:
@@ -318,7 +317,6 @@ class Scaffold(FedAvg):
         self, server_round: int, arrays: ArrayRecord, config: ConfigRecord, grid: Grid
     ) -> Iterable[Message]:
         messages = list(super().configure_train(server_round, arrays, config, grid))
-        self.sent_weights = named_arrays(arrays)
         fleet = self.fleet_control()
         if fleet is not None:
             record = arrays_of(fleet)
@@ -337,13 +335,7 @@ class Scaffold(FedAvg):
             del msg.content["control"]
             n = float(next(iter(msg.content.metric_records.values()))["num-examples"])  # type: ignore[arg-type]
             self.controls[msg.metadata.src_node_id] = (n, named_arrays(record))
-        arrays, metrics = super().aggregate_train(server_round, replies)
-        if arrays is None or self.server_learning_rate == 1.0 or not self.sent_weights:
-            return arrays, metrics
-        eta, old = self.server_learning_rate, self.sent_weights
-        average = named_arrays(arrays)
-        stepped = {k: old[k] + eta * (a - old[k]) for k, a in average.items()}
-        return arrays_of(stepped), metrics
+        return super().aggregate_train(server_round, replies)
 
 
 BASES = {
