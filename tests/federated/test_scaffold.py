@@ -10,8 +10,9 @@ from flwr.app import Array, ArrayRecord, ConfigRecord, Context, MetricRecord, Re
 from flwr.supercore.task_identity import TaskIdentity
 
 from proxima.federated import client_app
+from proxima.federated.config import ConfigError, FLConfig
 from proxima.federated.data import drone_data
-from proxima.federated.strategy import Scaffold, check_update
+from proxima.federated.strategy import Scaffold, check_update, guarded
 from proxima.federated.task import (
     control_step,
     get_weights,
@@ -19,6 +20,7 @@ from proxima.federated.task import (
     next_control,
     train_local,
 )
+from proxima.gesture.train import TrainConfig
 
 
 def test_the_correction_moves_every_step_by_lr_times_c_minus_ci() -> None:
@@ -150,3 +152,60 @@ def test_the_server_step_scales_the_averaged_move(task_identity) -> None:
     assert any(not np.allclose(local[k], old[k]) for k in old)
     for k in old:
         assert np.allclose(new[k], old[k] + 2 * (local[k] - old[k]), atol=1e-5)
+
+
+def test_local_weights_last_sends_the_last_epochs_weights_not_the_best_ones() -> None:
+    """`local-weights = last`: a drone trains all its local epochs and sends the weights
+    after the last one (with that epoch's validation figures and step count); `best`
+    (the default) sends the epoch its own validation tail liked best."""
+    from proxima.gesture.train import evaluate_loss, validation_features
+
+    assert FLConfig.from_run_config({"local-weights": "last"}).local_weights == "last"
+    assert FLConfig().local_weights == "best"
+    with pytest.raises(ConfigError, match="'local-weights'"):
+        FLConfig.from_run_config({"local-weights": "first"})
+    data = drone_data(fast_config(), 0, "front")
+    for keep in ("best", "last"):
+        cfg = fast_config(strategy="scaffold", local_epochs=3, patience=1, local_weights=keep)
+        model, pipeline = new_model(cfg)
+        res = train_local(model, pipeline, data.fit, data.val, cfg, 1, 0)
+        tc = TrainConfig(seed=cfg.seed + 1000, augment=cfg.augment)  # fit's validation draw
+        loss, _ = evaluate_loss(model, validation_features(pipeline, data.val, tc), data.val.labels)
+        assert loss == pytest.approx(res.val_loss, rel=1e-5)  # the sent weights' own loss
+        if keep == "last":
+            assert res.epochs == 3  # patience 1 could stop `best` early; `last` runs all
+            assert res.steps == -(-len(data.fit) // cfg.batch_size) * 3
+
+
+class _Quiet:
+    def client_result(self, server_round: int, client: str, **fields: object) -> None:
+        pass
+
+    def status(self, status: str, detail: str = "", **extra: object) -> None:
+        pass
+
+
+def test_the_average_does_not_depend_on_the_order_the_drones_answer(task_identity) -> None:
+    """Replies arrive in any order; the guarded strategy sorts them by drone before
+    averaging, so one seed gives one global model (floating-point sums are not
+    associative)."""
+    cfg = fast_config()
+    model, _ = new_model(cfg)
+    arrays = ArrayRecord(model.state_dict())
+    config = ConfigRecord(cfg.to_run_config())
+    sent = list(guarded(cfg, _Quiet()).configure_train(1, arrays, config, _Grid([1, 2, 3])))  # type: ignore[arg-type]
+    replies = []
+    for pid, msg in enumerate(sent):
+        context = Context(run_id=1, node_id=pid + 1, state=RecordDict(), run_config={},
+                          node_config={"partition-id": pid, "num-partitions": 3})  # fmt: skip
+        replies.append(client_app.train(msg, context))
+
+    def average(order: list[int]) -> dict[str, np.ndarray]:
+        strategy = guarded(cfg, _Quiet())
+        strategy.configure_train(1, arrays, config, _Grid([1, 2, 3]))  # type: ignore[arg-type]
+        new, _ = strategy.aggregate_train(1, [replies[i] for i in order])
+        assert new is not None
+        return {k: a.numpy() for k, a in new.items()}
+
+    forward, backward = average([0, 1, 2]), average([2, 0, 1])
+    assert all(np.array_equal(forward[k], backward[k]) for k in forward)

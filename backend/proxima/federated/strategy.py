@@ -12,7 +12,9 @@ variates, which Flower does not ship), subclassed with a mixin that:
   shape, non-finite values, or a missing / non-positive sample count;
 - leaves a drone that failed a round out of the next one, so a dead drone costs one
   round timeout rather than one per round (the SuperLink drops it from its node list
-  once its heartbeats stop, about a minute later).
+  once its heartbeats stop, about a minute later);
+- averages the replies in one order (by drone name), not in the order they arrive, so a
+  run's seed fixes its global model.
 """
 
 from __future__ import annotations
@@ -191,6 +193,9 @@ class GuardedMixin:
     ) -> tuple[ArrayRecord | None, MetricRecord | None]:
         replies = list(replies)
         accepted = self._screen(server_round, "train", replies, check=True)
+        # Replies come in the order drones finish; the weighted sums are floating point,
+        # so average in one fixed order (by drone) to make a seed give one model.
+        accepted.sort(key=lambda m: (_drone(m, self.names), m.metadata.src_node_id))
         if not accepted:
             self.train_summary[server_round] = {"ok": 0, "failed": len(replies)}
             return None, None

@@ -168,7 +168,9 @@ def train_local(
     round and drone, with FedProx's proximal term or SCAFFOLD's `correction` (c - c_i)
     when the strategy asks for it. The
     starting learning rate decays by `lr_decay` per round, standing in for the decay the
-    centralised run's ReduceLROnPlateau brings over many epochs."""
+    centralised run's ReduceLROnPlateau brings over many epochs. With `local_weights`
+    "last" the drone sends the weights after its last local epoch (and that epoch's
+    validation figures) instead of its best epoch's."""
     t0 = time.perf_counter()
     tc = TrainConfig(
         epochs=cfg.local_epochs,
@@ -183,6 +185,7 @@ def train_local(
         augment=cfg.augment,
     )
     mu = cfg.proximal_mu if cfg.strategy == "fedprox" else 0.0
+    keep_best = cfg.local_weights == "best"
     history = fit(
         model,
         pipeline,
@@ -191,14 +194,15 @@ def train_local(
         tc,
         penalty=proximal_penalty(model, mu),
         after_step=control_step(correction, tc.lr),
+        keep_best=keep_best,
     )
-    best = min(history, key=lambda h: h.val_loss)
-    kept = len(chosen_schedule(history, tc.lr)) if len(val_w) else len(history)
+    sent = min(history, key=lambda h: h.val_loss) if keep_best else history[-1]
+    kept = len(chosen_schedule(history, tc.lr)) if len(val_w) and keep_best else len(history)
     return LocalResult(
         num_examples=len(fit_w),
         train_loss=float(history[-1].train_loss),
-        val_loss=float(best.val_loss),
-        val_accuracy=float(best.val_accuracy),
+        val_loss=float(sent.val_loss),
+        val_accuracy=float(sent.val_accuracy),
         epochs=len(history),
         seconds=time.perf_counter() - t0,
         steps=kept * math.ceil(len(fit_w) / tc.batch_size),

@@ -234,8 +234,10 @@ def fit(
     source: CaptureSource | None = None,
     val_source: CaptureSource | None = None,
     after_step: Callable[[nn.Module], None] | None = None,
+    keep_best: bool = True,
 ) -> list[EpochLog]:
-    """Train `model` in place; with `val`, stop early and restore the best weights.
+    """Train `model` in place; with `val`, stop early and restore the best weights
+    (`keep_best` False: every epoch runs and the last weights stay; `val` is still scored).
 
     The pipeline must already be fitted. `penalty(model)`, if given, is added to every
     batch's loss (federated clients use it for FedProx's proximal term); `after_step`
@@ -281,9 +283,9 @@ def fit(
             since_best = 0
         else:
             since_best += 1
-            if xv is not None and since_best >= cfg.patience:
+            if xv is not None and keep_best and since_best >= cfg.patience:
                 break
-    if xv is not None:
+    if xv is not None and keep_best:
         model.load_state_dict(best[1])
     return history
 
