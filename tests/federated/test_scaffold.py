@@ -155,13 +155,13 @@ def test_the_server_step_scales_the_averaged_move(task_identity) -> None:
 
 
 def test_local_weights_last_sends_the_last_epochs_weights_not_the_best_ones() -> None:
-    """`local-weights = last`: a drone trains all its local epochs and sends the weights
-    after the last one (with that epoch's validation figures and step count); `best`
-    (the default) sends the epoch its own validation tail liked best."""
+    """`local-weights = last` (the default): a drone trains all its local epochs and sends
+    the weights after the last one (with that epoch's validation figures and step count);
+    `best` sends the epoch its own validation tail liked best."""
     from proxima.gesture.train import evaluate_loss, validation_features
 
-    assert FLConfig.from_run_config({"local-weights": "last"}).local_weights == "last"
-    assert FLConfig().local_weights == "best"
+    assert FLConfig.from_run_config({"local-weights": "best"}).local_weights == "best"
+    assert FLConfig().local_weights == "last"
     with pytest.raises(ConfigError, match="'local-weights'"):
         FLConfig.from_run_config({"local-weights": "first"})
     data = drone_data(fast_config(), 0, "front")
