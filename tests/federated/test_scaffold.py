@@ -12,6 +12,7 @@ from flwr.supercore.task_identity import TaskIdentity
 from proxima.federated import client_app
 from proxima.federated.config import ConfigError, FLConfig
 from proxima.federated.data import drone_data
+from proxima.federated.recorder import RunRecorder
 from proxima.federated.strategy import Scaffold, check_update, guarded
 from proxima.federated.task import (
     control_step,
@@ -20,7 +21,7 @@ from proxima.federated.task import (
     next_control,
     train_local,
 )
-from proxima.gesture.train import TrainConfig
+from proxima.gesture.train import TrainConfig, evaluate_loss, validation_features
 
 
 def test_the_correction_moves_every_step_by_lr_times_c_minus_ci() -> None:
@@ -158,8 +159,6 @@ def test_local_weights_last_sends_the_last_epochs_weights_not_the_best_ones() ->
     """`local-weights = last` (the default): a drone trains all its local epochs and sends
     the weights after the last one (with that epoch's validation figures and step count);
     `best` sends the epoch its own validation tail liked best."""
-    from proxima.gesture.train import evaluate_loss, validation_features
-
     assert FLConfig.from_run_config({"local-weights": "best"}).local_weights == "best"
     assert FLConfig().local_weights == "last"
     with pytest.raises(ConfigError, match="'local-weights'"):
@@ -177,14 +176,6 @@ def test_local_weights_last_sends_the_last_epochs_weights_not_the_best_ones() ->
             assert res.steps == -(-len(data.fit) // cfg.batch_size) * 3
 
 
-class _Quiet:
-    def client_result(self, server_round: int, client: str, **fields: object) -> None:
-        pass
-
-    def status(self, status: str, detail: str = "", **extra: object) -> None:
-        pass
-
-
 def test_the_average_does_not_depend_on_the_order_the_drones_answer(task_identity) -> None:
     """Replies arrive in any order; the guarded strategy sorts them by drone before
     averaging, so one seed gives one global model (floating-point sums are not
@@ -193,7 +184,8 @@ def test_the_average_does_not_depend_on_the_order_the_drones_answer(task_identit
     model, _ = new_model(cfg)
     arrays = ArrayRecord(model.state_dict())
     config = ConfigRecord(cfg.to_run_config())
-    sent = list(guarded(cfg, _Quiet()).configure_train(1, arrays, config, _Grid([1, 2, 3])))  # type: ignore[arg-type]
+    grid = _Grid([1, 2, 3])
+    sent = list(guarded(cfg, RunRecorder("t", 1)).configure_train(1, arrays, config, grid))  # type: ignore[arg-type]
     replies = []
     for pid, msg in enumerate(sent):
         context = Context(run_id=1, node_id=pid + 1, state=RecordDict(), run_config={},
@@ -201,8 +193,8 @@ def test_the_average_does_not_depend_on_the_order_the_drones_answer(task_identit
         replies.append(client_app.train(msg, context))
 
     def average(order: list[int]) -> dict[str, np.ndarray]:
-        strategy = guarded(cfg, _Quiet())
-        strategy.configure_train(1, arrays, config, _Grid([1, 2, 3]))  # type: ignore[arg-type]
+        strategy = guarded(cfg, RunRecorder("t", 1))
+        strategy.configure_train(1, arrays, config, grid)  # type: ignore[arg-type]
         new, _ = strategy.aggregate_train(1, [replies[i] for i in order])
         assert new is not None
         return {k: a.numpy() for k, a in new.items()}

@@ -196,8 +196,9 @@ def train_local(
         after_step=control_step(correction, tc.lr),
         keep_best=keep_best,
     )
-    sent = min(history, key=lambda h: h.val_loss) if keep_best else history[-1]
+    # epochs up to the weights sent: the one `fit` restored, or the last
     kept = len(chosen_schedule(history, tc.lr)) if len(val_w) and keep_best else len(history)
+    sent = history[kept - 1]
     return LocalResult(
         num_examples=len(fit_w),
         train_loss=float(history[-1].train_loss),
