@@ -8,8 +8,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from sqlalchemy import Engine, create_engine, event
+from sqlalchemy import Engine, Table, create_engine, event
 from sqlalchemy.engine.interfaces import DBAPIConnection
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import DeclarativeBase, sessionmaker
 
 
@@ -36,6 +37,20 @@ def make_engine(url_or_path: str | Path) -> Engine:
             cur.close()
 
     return engine
+
+
+def create_tables(engine: Engine, tables: list[Table]) -> None:
+    """Create the tables that do not exist yet. Two processes opening one new file at
+    once (e.g. two `proxima fl simulate` runs) can both see a table missing and both
+    create it; the loser's "already exists" means that table is there, so look again
+    (at most once per table: each retry finds one more of them made)."""
+    for attempt in range(len(tables) + 1):
+        try:
+            Base.metadata.create_all(engine, tables=tables)
+            return
+        except OperationalError as exc:
+            if "already exists" not in str(exc) or attempt == len(tables):
+                raise
 
 
 def make_sessionmaker(engine: Engine) -> sessionmaker:

@@ -15,7 +15,7 @@ from typing import Any
 from sqlalchemy import DateTime, Engine, Float, Integer, String, Text, select
 from sqlalchemy.orm import Mapped, mapped_column
 
-from proxima.store.base import Base, make_engine, make_sessionmaker
+from proxima.store.base import Base, create_tables, make_engine, make_sessionmaker
 
 
 def utcnow() -> datetime:
@@ -69,9 +69,7 @@ class CommandLog:
         self.engine = (
             engine_or_path if isinstance(engine_or_path, Engine) else make_engine(engine_or_path)
         )
-        Base.metadata.create_all(
-            self.engine, tables=[Base.metadata.tables[CommandRecord.__tablename__]]
-        )
+        create_tables(self.engine, [Base.metadata.tables[CommandRecord.__tablename__]])
         self._session = make_sessionmaker(self.engine)
         self._lock = threading.Lock()
 

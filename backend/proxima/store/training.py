@@ -18,7 +18,7 @@ from typing import Any
 from sqlalchemy import Engine, Float, ForeignKey, Integer, String, Text, delete, select
 from sqlalchemy.orm import Mapped, mapped_column
 
-from proxima.store.base import Base, make_engine, make_sessionmaker
+from proxima.store.base import Base, create_tables, make_engine, make_sessionmaker
 
 RUN_STATUSES = ("pending", "waiting", "running", "completed", "failed", "stopped")
 FINISHED = ("completed", "failed", "stopped")
@@ -117,7 +117,7 @@ class TrainingStore:
             engine_or_path if isinstance(engine_or_path, Engine) else make_engine(engine_or_path)
         )
         tables = [Base.metadata.tables[t.__tablename__] for t in self.TABLES]
-        Base.metadata.create_all(self.engine, tables=tables)
+        create_tables(self.engine, tables)
         self._session = make_sessionmaker(self.engine)
         self._lock = threading.Lock()
 
