@@ -51,7 +51,7 @@ typecheck: install
 	$(BIN)/mypy
 
 test: install frontend lint typecheck
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2
 
 # No model training, simulator processes, browser, RTSP server or wheel build (the tests
 # marked slow, see tests/conftest.py); under 3 minutes on a 2-core machine.

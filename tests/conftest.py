@@ -24,6 +24,27 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             item.add_marker(pytest.mark.slow)
 
 
+# `make test` runs two pytest-xdist workers. A test module stays on one worker, so its
+# module fixtures run once and its tests keep their order; the console's tests (API,
+# browser, demo, 3D view) all share one worker because the console binds the fixed
+# MAVLink ports (udpin:127.0.0.1:14550 and up) that two consoles at once would fight
+# over. (xdist's own `--dist loadgroup` ignored its group marks with pytest 9.2 here.)
+CONSOLE_DIRS = frozenset({"api", "ui", "demo", "viz"})
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ModuleOrConsole(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = nodeid.split("::", 1)[0]
+            parts = path.split("/")
+            return "console" if len(parts) > 2 and parts[1] in CONSOLE_DIRS else path
+
+    return ModuleOrConsole(config, log)
+
+
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"
 LASER_DIR = SHARED / "datasets" / "laser-uav-gesture"

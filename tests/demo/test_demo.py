@@ -238,9 +238,9 @@ def descendants(pid: int) -> list[psutil.Process]:
 
 @pytest.mark.slow
 @pytest.mark.timeout(240)
-@pytest.mark.parametrize(
-    "sig", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP], ids=lambda s: s.name
-)
+# SIGINT and SIGTERM end the full demo above; SIGHUP (a closed terminal), whose default
+# action would kill the demo before it stops anything, here.
+@pytest.mark.parametrize("sig", [signal.SIGHUP], ids=lambda s: s.name)
 def test_a_small_demo_stops_every_child_on_a_signal(
     sig: signal.Signals, tmp_path: Path, checkpoint: Path
 ) -> None:

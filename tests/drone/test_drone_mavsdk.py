@@ -12,6 +12,7 @@ import socket
 import time
 import warnings
 from collections.abc import AsyncIterator, Awaitable, Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any
 
 import pytest
@@ -153,6 +154,9 @@ def test_mavsdk_standard_flow(start_sim: StartSim, autopilot: str) -> None:
     flags = ("--autopilot", "px4") if autopilot == "px4" else ()  # ArduPilot: the default
     sim = start_sim(*flags, sysid=1)
     step = Steps(" ".join(flags) or "default: ArduPilot")
-    asyncio.run(flow(sim.port, autopilot == "px4", step))
+    # On its own thread: Playwright's sync API (the browser tests, when they ran earlier
+    # on this pytest-xdist worker) leaves an event loop running on the main thread.
+    with ThreadPoolExecutor(1) as pool:
+        pool.submit(asyncio.run, flow(sim.port, autopilot == "px4", step)).result()
     print(step.report())
     assert sim.proc.poll() is None
