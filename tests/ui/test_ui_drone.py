@@ -192,8 +192,8 @@ def test_command_log_rows_reasons_reload_filter_and_csv(page, flying: Console) -
     filter by drone and outcome, and CSV export."""
     login(page, flying.url)
     page.wait_for_selector(".drone[data-drone=main] .badge.l-ok")
-    # The test before landed the drone; on a busy machine its landed state may still be
-    # settling, and a move is refused "not flying" only once it reads on the ground.
+    # This test needs the drone the test before landed (a module's tests run in order on
+    # one worker); a move is refused "not flying" only once the drone reads on the ground.
     link = flying.runtime.links["main"]
     wait_for(lambda: link.telemetry().landed == "on_ground", timeout=30, what="on the ground")
     t0 = time.time()
