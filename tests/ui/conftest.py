@@ -28,7 +28,10 @@ def browser() -> Iterator[object]:
 def page(browser) -> Iterator[object]:  # type: ignore[no-untyped-def]
     context = browser.new_context(viewport={"width": 1400, "height": 900})
     pg = context.new_page()
-    pg.set_default_timeout(15000)
+    # A bound on every wait, not a speed check: under `make test` the browser shares two
+    # cores with the other pytest-xdist worker's training, and software WebGL, a
+    # screenshot or a resume through the drone link have taken over 15 s there.
+    pg.set_default_timeout(45000)
     errors: list[str] = []
     pg.on("pageerror", lambda e: errors.append(str(e)))
     yield pg
