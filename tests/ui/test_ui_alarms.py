@@ -42,9 +42,9 @@ def test_battery_and_failsafe_alarms_are_visible(page, tmp_path: Path) -> None: 
         page.wait_for_selector(".drone[data-drone=main] .badge.l-ok")
         assert page.is_hidden("#alarm-banner")
         assert link.enter_guided().ok and link.arm().ok and link.takeoff(3.0).ok
-        page.wait_for_selector("#alarm-banner.sev-warning:has-text('battery')", timeout=20000)
+        page.wait_for_selector("#alarm-banner.sev-warning:has-text('battery')")
         page.wait_for_selector(".drone[data-drone=main] .battery.sev-warning")
-        page.wait_for_selector("#alarm-banner.sev-critical", timeout=20000)
+        page.wait_for_selector("#alarm-banner.sev-critical")
         page.wait_for_selector(
             ".alarms .alarm.sev-critical[data-kind=failsafe_landing]", timeout=20000
         )

@@ -73,21 +73,20 @@ def test_calibrate_a_camera_and_promote_for_it(page, tmp_path: Path) -> None:  #
         # The stream performs move_downward: the reading agrees.
         page.click("button.record-take")
         page.wait_for_selector(".take-status.countdown")
-        page.wait_for_selector(".take-status.rec", timeout=10000)
-        page.wait_for_selector(".take-reading.ok:has-text('reads this take as move_downward')",
-                               timeout=20000)  # fmt: skip
+        page.wait_for_selector(".take-status.rec")
+        page.wait_for_selector(".take-reading.ok:has-text('reads this take as move_downward')")
         assert "1 of 2 takes" in page.inner_text(".walk-title")
         page.click("button.next-take")
         assert page.get_attribute(".prompt-gesture", "data-gesture") == "wave_off"
         # Prompted wave_off while the stream shows something else: a warning, then a redo.
         page.click("button.record-take")
-        page.wait_for_selector(".take-reading.warn:has-text('not wave_off')", timeout=25000)
+        page.wait_for_selector(".take-reading.warn:has-text('not wave_off')")
         assert page.is_visible("ol.takes li.st-warn[data-gesture=wave_off]")
         screenshot(page, "calibration-takes")
         assert page.inner_text("button.record-take") == "Redo wave_off"
         first = page.inner_text(".take-status")
         page.click("button.record-take")
-        page.wait_for_selector(".take-status.rec", timeout=10000)
+        page.wait_for_selector(".take-status.rec")
         page.wait_for_function(
             "f => { const s = document.querySelector('.take-status');"
             " return s.classList.contains('ok') && s.textContent !== f; }",

@@ -106,7 +106,7 @@ def test_3d_view_shows_the_drone(page, flying: Console) -> None:  # type: ignore
     # Through the console's own port, behind its login: viser's port is never shown.
     assert page.get_attribute("iframe.viser", "src") == "/viser/"
     frame = page.frame_locator("iframe.viser")
-    frame.locator("text=Connected").wait_for(timeout=20000)
+    frame.locator("text=Connected").wait_for()
     # viser's own control panel starts minimised to its status bar: no scene tree.
     page.wait_for_timeout(1000)
     assert not frame.locator("text=/drones").is_visible()

@@ -33,7 +33,7 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
         page.select_option("select.gesture", "move_upward")
         page.click("button.record")
         page.wait_for_selector(".rec-status.countdown")  # the countdown is shown first
-        page.wait_for_selector(".review-box:not([hidden])", timeout=20000)
+        page.wait_for_selector(".review-box:not([hidden])")
         title = page.inner_text(".review-title")
         assert "45 frames of front for main (pending)" in title
         # The review canvas plays the recorded skeleton.
