@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import torch
 from fl_helpers import fast_config
 from flwr.app import Array, ArrayRecord, ConfigRecord, Context, MetricRecord, RecordDict
 from flwr.supercore.task_identity import TaskIdentity
@@ -15,6 +16,7 @@ from proxima.federated.data import drone_data
 from proxima.federated.recorder import RunRecorder
 from proxima.federated.strategy import Scaffold, check_update, guarded
 from proxima.federated.task import (
+    LocalResult,
     control_step,
     get_weights,
     new_model,
@@ -161,6 +163,7 @@ def test_local_weights_last_sends_the_last_epochs_weights_not_the_best_ones() ->
     `best` sends the epoch its own validation tail liked best."""
     assert FLConfig.from_run_config({"local-weights": "best"}).local_weights == "best"
     assert FLConfig().local_weights == "last"
+    assert FLConfig.from_run_config({"local-weights": "mean"}).local_weights == "mean"
     with pytest.raises(ConfigError, match="'local-weights'"):
         FLConfig.from_run_config({"local-weights": "first"})
     data = drone_data(fast_config(), 0, "front")
@@ -174,6 +177,34 @@ def test_local_weights_last_sends_the_last_epochs_weights_not_the_best_ones() ->
         if keep == "last":
             assert res.epochs == 3  # patience 1 could stop `best` early; `last` runs all
             assert res.steps == -(-len(data.fit) // cfg.batch_size) * 3
+
+
+def test_local_weights_mean_sends_the_mean_of_the_rounds_second_half() -> None:
+    """`local-weights = mean`: with 4 local epochs the drone sends the mean of its weights
+    after epochs 3 and 4 (the same seeded run, which averaging does not change), with
+    those weights' own validation loss and the step count of epoch 3.5."""
+    data = drone_data(fast_config(), 0, "front")
+
+    def run(epochs: int, keep: str) -> tuple[dict[str, np.ndarray], LocalResult]:
+        cfg = fast_config(strategy="scaffold", local_epochs=epochs, local_weights=keep)
+        model, pipeline = new_model(cfg)
+        res = train_local(model, pipeline, data.fit, data.val, cfg, 1, 0)
+        return {k: v.detach().numpy().copy() for k, v in model.state_dict().items()}, res
+
+    after3, _ = run(3, "last")
+    after4, _ = run(4, "last")
+    mean, res = run(4, "mean")
+    assert any(not np.allclose(after3[k], after4[k]) for k in after4)
+    for k in mean:
+        assert np.allclose(mean[k], (after3[k] + after4[k]) / 2, atol=1e-6)
+    cfg = fast_config(strategy="scaffold", local_epochs=4, local_weights="mean")
+    model, pipeline = new_model(cfg)
+    model.load_state_dict({k: torch.from_numpy(v) for k, v in mean.items()})
+    tc = TrainConfig(seed=cfg.seed + 1000, augment=cfg.augment)  # fit's validation draw
+    loss, _ = evaluate_loss(model, validation_features(pipeline, data.val, tc), data.val.labels)
+    assert loss == pytest.approx(res.val_loss, rel=1e-5)
+    assert res.epochs == 4
+    assert res.steps == round(3.5 * -(-len(data.fit) // cfg.batch_size))
 
 
 def test_the_average_does_not_depend_on_the_order_the_drones_answer(task_identity) -> None:

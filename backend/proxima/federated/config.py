@@ -78,9 +78,10 @@ class FLConfig:
     test_stride: AtLeastOne = 3  # frames between held-out test windows
     max_gap: Annotated[int, Field(ge=0)] = 5
     patience: AtLeastOne = 12  # local early stopping (epochs without a better val loss)
-    # the weights a drone sends: those after its last local epoch ("last"), or its best
-    # epoch's by its own small validation tail ("best"; 1 point worse, docs/federated.md)
-    local_weights: Literal["best", "last"] = "last"
+    # the weights a drone sends: those after its last local epoch ("last"), its best
+    # epoch's by its own small validation tail ("best"; 1 point worse, docs/federated.md),
+    # or the mean of its weights after each epoch of the second half of the round ("mean")
+    local_weights: Literal["best", "last", "mean"] = "last"
     mirror: bool = False  # mirroring on the drones; no gain measured (docs/federated.md)
     # local epochs on capture-noised, One-Euro-smoothed windows (gesture/robust.py; the
     # partitions carry no history, so without the frame-rate and loss effects), or "none"

@@ -20,7 +20,14 @@ from torch import nn
 from proxima.federated.config import ConfigError, FLConfig
 from proxima.gesture.features import Pipeline, make_pipeline
 from proxima.gesture.models import build_model
-from proxima.gesture.train import TrainConfig, chosen_schedule, evaluate_loss, features, fit
+from proxima.gesture.train import (
+    TrainConfig,
+    chosen_schedule,
+    evaluate_loss,
+    features,
+    fit,
+    validation_features,
+)
 from proxima.gesture.windows import Windows
 
 
@@ -170,7 +177,10 @@ def train_local(
     starting learning rate decays by `lr_decay` per round, standing in for the decay the
     centralised run's ReduceLROnPlateau brings over many epochs. With `local_weights`
     "last" the drone sends the weights after its last local epoch (and that epoch's
-    validation figures) instead of its best epoch's."""
+    validation figures) instead of its best epoch's; with "mean", the mean of its weights
+    after each epoch of the round's second half (epochs E // 2 + 1 to E), a flatter
+    point that may average better across drones; its step count (SCAFFOLD's control
+    variate) is that of the middle averaged epoch."""
     t0 = time.perf_counter()
     tc = TrainConfig(
         epochs=cfg.local_epochs,
@@ -186,6 +196,7 @@ def train_local(
     )
     mu = cfg.proximal_mu if cfg.strategy == "fedprox" else 0.0
     keep_best = cfg.local_weights == "best"
+    average_from = cfg.local_epochs // 2 + 1 if cfg.local_weights == "mean" else None
     history = fit(
         model,
         pipeline,
@@ -195,18 +206,27 @@ def train_local(
         penalty=proximal_penalty(model, mu),
         after_step=control_step(correction, tc.lr),
         keep_best=keep_best,
+        average_from=average_from,
     )
-    # epochs up to the weights sent: the one `fit` restored, or the last
-    kept = len(chosen_schedule(history, tc.lr)) if len(val_w) and keep_best else len(history)
-    sent = history[kept - 1]
+    # epochs up to the weights sent: the one `fit` restored, the last, or the middle of
+    # the averaged ones (whose own figures are scored on fit's validation draw)
+    kept: float = len(history)
+    if len(val_w) and keep_best:
+        kept = len(chosen_schedule(history, tc.lr))
+    val_loss, val_accuracy = history[int(kept) - 1].val_loss, history[int(kept) - 1].val_accuracy
+    if average_from is not None:
+        kept = (average_from + len(history)) / 2
+        if len(val_w):
+            xv = validation_features(pipeline, val_w, tc)
+            val_loss, val_accuracy = evaluate_loss(model, xv, val_w.labels)
     return LocalResult(
         num_examples=len(fit_w),
         train_loss=float(history[-1].train_loss),
-        val_loss=float(sent.val_loss),
-        val_accuracy=float(sent.val_accuracy),
+        val_loss=float(val_loss),
+        val_accuracy=float(val_accuracy),
         epochs=len(history),
         seconds=time.perf_counter() - t0,
-        steps=kept * math.ceil(len(fit_w) / tc.batch_size),
+        steps=round(kept * math.ceil(len(fit_w) / tc.batch_size)),
         lr=tc.lr,
     )
 

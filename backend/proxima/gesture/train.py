@@ -235,9 +235,12 @@ def fit(
     val_source: CaptureSource | None = None,
     after_step: Callable[[nn.Module], None] | None = None,
     keep_best: bool = True,
+    average_from: int | None = None,
 ) -> list[EpochLog]:
     """Train `model` in place; with `val`, stop early and restore the best weights
     (`keep_best` False: every epoch runs and the last weights stay; `val` is still scored).
+    `average_from` E (with `keep_best` False): the model ends as the mean of its weights
+    after each epoch from E on (stochastic weight averaging over the run's tail).
 
     The pipeline must already be fitted. `penalty(model)`, if given, is added to every
     batch's loss (federated clients use it for FedProx's proximal term); `after_step`
@@ -255,6 +258,7 @@ def fit(
         opt, factor=cfg.lr_factor, patience=cfg.lr_patience
     )
     best = (float("inf"), copy.deepcopy(model.state_dict()))
+    tail = TailAverage()
     history: list[EpochLog] = []
     since_best = 0
     for epoch in range(1, cfg.epochs + 1):
@@ -278,6 +282,8 @@ def fit(
         history.append(log)
         if on_epoch:
             on_epoch(log)
+        if average_from is not None and epoch >= average_from:
+            tail.add(model)
         if val_loss < best[0] - MIN_DELTA:
             best = (val_loss, copy.deepcopy(model.state_dict()))
             since_best = 0
@@ -287,7 +293,32 @@ def fit(
                 break
     if xv is not None and keep_best:
         model.load_state_dict(best[1])
+    elif tail.count:
+        model.load_state_dict(tail.mean(model))
     return history
+
+
+class TailAverage:
+    """Running mean of a model's floating-point weights, one `add` per epoch."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.sums: dict[str, torch.Tensor] = {}
+
+    def add(self, model: nn.Module) -> None:
+        self.count += 1
+        for name, value in model.state_dict().items():
+            if value.is_floating_point():
+                v = value.detach().to(torch.float64)
+                self.sums[name] = self.sums[name] + v if name in self.sums else v.clone()
+
+    def mean(self, model: nn.Module) -> dict[str, torch.Tensor]:
+        """The model's state with every floating-point tensor replaced by its mean."""
+        state = model.state_dict()
+        return {
+            name: (self.sums[name] / self.count).to(value.dtype) if name in self.sums else value
+            for name, value in state.items()
+        }
 
 
 def chosen_schedule(history: list[EpochLog], lr: float) -> list[float]:
