@@ -1,0 +1,94 @@
+"""How much of the error is the thumb? all_clear and not_clear are the same raised right
+arm, thumb up or thumb down (the marshalling signals they come from). UAV-Gesture's
+OpenPose joints hold no hand points, and the LASER left view hides the right hand behind
+the body (MediaPipe guesses it). Each split's held-out model is scored with `proxima
+evaluate`; from its confusion matrix this reports the window accuracy, the accuracy with
+the two counted as one gesture, and the share of errors between them.
+
+    python -m bench.thumb_ceiling --checkpoint SPLIT=PATH [--checkpoint ...]
+        [--out bench/results/thumb_ceiling.json]
+
+SPLIT is any split `proxima evaluate` takes (uav-gesture:N scores UAV-Gesture, every
+other LASER); PATH a model that never saw the split's test part (e.g. `proxima train
+--data uav-gesture --split uav-gesture:1 ...`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from proxima.types import GESTURES
+
+RESULTS = Path(__file__).resolve().parent / "results"
+PAIR = (GESTURES.index("all_clear"), GESTURES.index("not_clear"))
+
+
+def thumb_figures(confusion: np.ndarray) -> dict[str, float]:
+    """Accuracy, accuracy with the pair merged, the pair's share of the errors, and each
+    of the two gestures' recall, from a confusion matrix (rows: true gesture)."""
+    a, n = PAIR
+    total = confusion.sum()
+    right = np.trace(confusion)
+    between = confusion[a, n] + confusion[n, a]
+    errors = total - right
+    return {
+        "windows": int(total),
+        "accuracy": float(right / total),
+        "accuracy_pair_merged": float((right + between) / total),
+        "pair_share_of_errors": float(between / errors) if errors else 0.0,
+        "pair_share_of_windows": float(confusion[[a, n]].sum() / total),
+        "all_clear_recall": float(confusion[a, a] / max(confusion[a].sum(), 1)),
+        "not_clear_recall": float(confusion[n, n] / max(confusion[n].sum(), 1)),
+    }
+
+
+def evaluate(checkpoint: str, split: str) -> tuple[dict[str, Any], str]:
+    """`proxima evaluate` of one checkpoint on one split: (its metrics JSON, the command)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "metrics.json"
+        data = "uav-gesture" if "uav-gesture" in split else "laser"
+        cmd = ["proxima", "evaluate", "--checkpoint", checkpoint, "--data", data,
+               "--split", split, "--json", str(out)]  # fmt: skip
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        return json.loads(out.read_text()), " ".join([*cmd[:-2], "--json", "J"])
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--checkpoint", action="append", required=True, metavar="SPLIT=PATH")
+    ap.add_argument("--out", type=Path, default=RESULTS / "thumb_ceiling.json")
+    args = ap.parse_args(argv)
+    rows = []
+    for item in args.checkpoint:
+        split, sep, path = item.partition("=")
+        if not sep:
+            ap.error(f"--checkpoint {item!r}: expected SPLIT=PATH")
+        metrics, command = evaluate(path, split)
+        row = {"split": split, "checkpoint": path, "command": command}
+        row |= thumb_figures(np.asarray(metrics["confusion"]))
+        rows.append(row)
+        print(f"{split}: accuracy {row['accuracy']:.3f}, all_clear + not_clear as one "
+              f"{row['accuracy_pair_merged']:.3f} ({row['pair_share_of_errors']:.0%} of the "
+              f"errors are between them)")  # fmt: skip
+    mean = {k: float(np.mean([r[k] for r in rows]))
+            for k in ("accuracy", "accuracy_pair_merged", "pair_share_of_errors")}  # fmt: skip
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps({"benchmark": "thumb_ceiling", "argv": sys.argv[1:],
+                                    "rows": rows, "mean": mean}, indent=1) + "\n")  # fmt: skip
+    print(
+        f"mean accuracy {mean['accuracy']:.3f}, pair merged {mean['accuracy_pair_merged']:.3f} "
+        f"-> {args.out}"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
