@@ -6,11 +6,14 @@ evaluate`; from its confusion matrix this reports the window accuracy, the accur
 the two counted as one gesture, and the share of errors between them.
 
     python -m bench.thumb_ceiling --checkpoint SPLIT=PATH [--checkpoint ...]
-        [--out bench/results/thumb_ceiling.json]
+        [--streams 12 --segments 30] [--out bench/results/thumb_ceiling.json]
 
 SPLIT is any split `proxima evaluate` takes (uav-gesture:N scores UAV-Gesture, every
 other LASER); PATH a model that never saw the split's test part (e.g. `proxima train
---data uav-gesture --split uav-gesture:1 ...`).
+--data uav-gesture --split uav-gesture:1 ...`). `--streams N` also counts, in the
+stitched held-out streams of `python -m bench.robust_training streams` (seeds 1000 on,
+views f, l, r in turn), the gestures per view: a left-view all_clear or not_clear is a
+command whose deciding hand that camera does not see.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import numpy as np
 from proxima.types import GESTURES
 
 RESULTS = Path(__file__).resolve().parent / "results"
+THUMB = ("all_clear", "not_clear")
 PAIR = (GESTURES.index("all_clear"), GESTURES.index("not_clear"))
 
 
@@ -50,6 +54,23 @@ def thumb_figures(confusion: np.ndarray) -> dict[str, float]:
     }
 
 
+def stream_gestures(streams: int, segments: int) -> dict[str, Any]:
+    """Gestures per view in the stitched held-out streams (no classifier involved)."""
+    from proxima.evaluation.robust_training import decision_streams
+    from proxima.gesture.capture import condition
+    from proxima.gesture.datasets import load_data
+
+    clips = load_data(["laser"]).clips
+    out: dict[str, Any] = {}
+    for st in decision_streams(clips, range(1000, 1000 + streams), segments, condition("field", 1)):
+        view = out.setdefault(st.view, {"segments": 0, "thumb": 0})
+        view["segments"] += len(st.segments)
+        view["thumb"] += sum(seg.gesture in THUMB for seg in st.segments)
+    total = sum(v["segments"] for v in out.values())
+    out["left_thumb_share"] = out["l"]["thumb"] / total if total else 0.0
+    return out
+
+
 def evaluate(checkpoint: str, split: str) -> tuple[dict[str, Any], str]:
     """`proxima evaluate` of one checkpoint on one split: (its metrics JSON, the command)."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -64,6 +85,8 @@ def evaluate(checkpoint: str, split: str) -> tuple[dict[str, Any], str]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--checkpoint", action="append", required=True, metavar="SPLIT=PATH")
+    ap.add_argument("--streams", type=int, default=0, help="held-out streams to count")
+    ap.add_argument("--segments", type=int, default=30, help="gestures a stream")
     ap.add_argument("--out", type=Path, default=RESULTS / "thumb_ceiling.json")
     args = ap.parse_args(argv)
     rows = []
@@ -80,9 +103,15 @@ def main(argv: list[str] | None = None) -> int:
               f"errors are between them)")  # fmt: skip
     mean = {k: float(np.mean([r[k] for r in rows]))
             for k in ("accuracy", "accuracy_pair_merged", "pair_share_of_errors")}  # fmt: skip
+    result: dict[str, Any] = {"benchmark": "thumb_ceiling", "argv": sys.argv[1:], "rows": rows,
+                              "mean": mean}  # fmt: skip
+    if args.streams:
+        counts = stream_gestures(args.streams, args.segments)
+        result["streams"] = counts
+        share = counts["left_thumb_share"]
+        print(f"held-out streams: {share:.1%} of the gestures are left-view all_clear / not_clear")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({"benchmark": "thumb_ceiling", "argv": sys.argv[1:],
-                                    "rows": rows, "mean": mean}, indent=1) + "\n")  # fmt: skip
+    args.out.write_text(json.dumps(result, indent=1) + "\n")
     print(
         f"mean accuracy {mean['accuracy']:.3f}, pair merged {mean['accuracy_pair_merged']:.3f} "
         f"-> {args.out}"
