@@ -1,9 +1,10 @@
 """How much of the error is the thumb? all_clear and not_clear are the same raised right
 arm, thumb up or thumb down (the marshalling signals they come from). UAV-Gesture's
 OpenPose joints hold no hand points, and the LASER left view hides the right hand behind
-the body (MediaPipe guesses it). Each split's held-out model is scored with `proxima
-evaluate`; from its confusion matrix this reports the window accuracy, the accuracy with
-the two counted as one gesture, and the share of errors between them.
+the body (MediaPipe guesses it). Each split's held-out model is scored as `proxima
+evaluate` scores it (`evaluate_checkpoint`); from its confusion matrix this reports the
+window accuracy, the accuracy with the two counted as one gesture, and the share of
+errors between them.
 
     python -m bench.thumb_ceiling --checkpoint SPLIT=PATH [--checkpoint ...]
         [--streams 12 --segments 30] [--out bench/results/thumb_ceiling.json]
@@ -20,19 +21,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from proxima.evaluation.metrics import evaluate_checkpoint
 from proxima.types import GESTURES
 
 RESULTS = Path(__file__).resolve().parent / "results"
 THUMB = ("all_clear", "not_clear")
-PAIR = (GESTURES.index("all_clear"), GESTURES.index("not_clear"))
+PAIR = tuple(GESTURES.index(g) for g in THUMB)
 
 
 def thumb_figures(confusion: np.ndarray) -> dict[str, float]:
@@ -72,14 +72,11 @@ def stream_gestures(streams: int, segments: int) -> dict[str, Any]:
 
 
 def evaluate(checkpoint: str, split: str) -> tuple[dict[str, Any], str]:
-    """`proxima evaluate` of one checkpoint on one split: (its metrics JSON, the command)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "metrics.json"
-        data = "uav-gesture" if "uav-gesture" in split else "laser"
-        cmd = ["proxima", "evaluate", "--checkpoint", checkpoint, "--data", data,
-               "--split", split, "--json", str(out)]  # fmt: skip
-        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-        return json.loads(out.read_text()), " ".join([*cmd[:-2], "--json", "J"])
+    """One checkpoint's metrics on one split, and the `proxima evaluate` command that
+    writes the same metrics."""
+    data = "uav-gesture" if "uav-gesture" in split else "laser"
+    command = f"proxima evaluate --checkpoint {checkpoint} --data {data} --split {split} --json J"
+    return evaluate_checkpoint(checkpoint, [data], split), command
 
 
 def main(argv: list[str] | None = None) -> int:

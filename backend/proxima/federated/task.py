@@ -208,12 +208,15 @@ def train_local(
         keep_best=keep_best,
         average_from=average_from,
     )
-    # epochs up to the weights sent: the one `fit` restored, the last, or the middle of
-    # the averaged ones (whose own figures are scored on fit's validation draw)
+    # the weights sent: those `fit` restored (best), the last, or the mean of the round's
+    # second half, scored on fit's validation draw; `kept` counts the epochs up to them
+    # (the middle averaged epoch for the mean)
+    sent = history[-1]
     kept: float = len(history)
     if len(val_w) and keep_best:
         kept = len(chosen_schedule(history, tc.lr))
-    val_loss, val_accuracy = history[int(kept) - 1].val_loss, history[int(kept) - 1].val_accuracy
+        sent = history[int(kept) - 1]
+    val_loss, val_accuracy = sent.val_loss, sent.val_accuracy
     if average_from is not None:
         kept = (average_from + len(history)) / 2
         if len(val_w):
