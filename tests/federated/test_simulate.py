@@ -66,3 +66,32 @@ def test_too_few_drones_is_a_visible_wait_with_a_timeout(tmp_path: Path) -> None
     assert "only 3 of 4 drones connected after 3 s" in result.detail
     run = store.run_row(result.run_id)
     assert run["status"] == "failed" and "only 3 of 4" in run["detail"]
+
+
+def test_keep_round_best_ends_with_the_round_the_drones_validation_scores_best(
+    tmp_path: Path,
+) -> None:
+    from proxima.federated.config import ConfigError
+    from proxima.federated.data import test_windows
+    from proxima.federated.simulate import simulate
+    from proxima.federated.task import Scorer
+
+    with pytest.raises(ConfigError, match="keep-round.*fraction-evaluate"):
+        fast_config(keep_round="best")
+    cfg = fast_config(rounds=3, keep_round="best", fraction_evaluate=1.0,
+                      models_dir=str(tmp_path / "models"))  # fmt: skip
+    doc = simulate(cfg).to_json()
+    assert doc["status"] == "completed"
+    rounds = doc["rounds"][1:]
+    assert all(r["val_loss"] > 0 and 0 <= r["val_accuracy"] <= 1 for r in rounds)
+    best = min(rounds, key=lambda r: r["val_loss"])
+    assert doc["kept_round"] == best["round"]
+    assert doc["final_accuracy"] == best["global_accuracy"]
+    # the saved checkpoint is that round's global model, not the last one's
+    clf = GestureClassifier.load(Path(doc["checkpoint"]))
+    assert clf.metadata["federated"]["kept_round"] == best["round"]
+    weights = {k: v.numpy() for k, v in clf.model.state_dict().items()}
+    _, acc = Scorer(cfg, test_windows(cfg))(weights)
+    assert acc == pytest.approx(best["global_accuracy"])
+    card = Path(doc["checkpoint"]).with_suffix(".md").read_text()
+    assert f"Kept: round {best['round']}'s global model (lowest loss" in card

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from proxima.federated.config import FLConfig
+from proxima.federated.recorder import kept_round_row
 from proxima.federated.task import new_model, set_weights
 from proxima.gesture.classifier import save_checkpoint
 from proxima.gesture.windows import WINDOW
@@ -31,17 +32,20 @@ def save_run_model(
     weights: dict[str, np.ndarray],
     rounds: list[dict[str, Any]],
     extra: dict[str, Any] | None = None,
+    kept: int | None = None,
 ) -> tuple[Path, Path]:
-    """Write the global model and its card; returns (checkpoint, card)."""
+    """Write the global model (round `kept`'s, default the last) and its card; returns
+    (checkpoint, card)."""
     model, pipeline = new_model(cfg)
     set_weights(model, weights)
-    final = rounds[-1] if rounds else {}
+    final = kept_round_row(rounds, kept)
     meta = {
         "command": "federated run",
         "split": "temporal",
         "federated": {
             "run_id": cfg.run_id,
             "run_config": cfg.to_run_config(),
+            "kept_round": final.get("round"),
             "rounds": [
                 {
                     k: r.get(k)
@@ -49,6 +53,7 @@ def save_run_model(
                         "round",
                         "global_accuracy",
                         "global_loss",
+                        "val_loss",
                         "clients_ok",
                         "clients_failed",
                     )
@@ -63,7 +68,7 @@ def save_run_model(
         checkpoint_path(cfg.models_dir, cfg.run_id), model, cfg.model, pipeline, WINDOW, meta
     )
     card = path.with_suffix(".md")
-    card.write_text(model_card(cfg, rounds, path, extra or {}))
+    card.write_text(model_card(cfg, rounds, path, extra or {}, final))
     return path, card
 
 
@@ -72,10 +77,20 @@ def _fmt(x: Any) -> str:
 
 
 def model_card(
-    cfg: FLConfig, rounds: list[dict[str, Any]], path: Path, extra: dict[str, Any]
+    cfg: FLConfig,
+    rounds: list[dict[str, Any]],
+    path: Path,
+    extra: dict[str, Any],
+    final: dict[str, Any] | None = None,
 ) -> str:
-    """The Markdown card: what, how trained, how it scored, and how to use it."""
-    final = rounds[-1] if rounds else {}
+    """The Markdown card: what, how trained, how it scored (the model is round `final`'s,
+    default the last), and how to use it."""
+    final = final if final is not None else kept_round_row(rounds, None)
+    kept_why = (
+        "lowest loss on the drones' validation windows"
+        if cfg.keep_round == "best"
+        else "the last round's"
+    )
     drones = sorted({c["drone"] for r in rounds for c in r.get("clients", [])})
     lines = [
         f"# Federated gesture model `{path.name}`",
@@ -94,17 +109,20 @@ def model_card(
         f"every {cfg.test_stride} frames; no drone trained on it",
         f"- **Global accuracy after round {final.get('round', '-')}: "
         f"{_fmt(final.get('global_accuracy'))}** (loss {_fmt(final.get('global_loss'))})",
+        f"- Kept: round {final.get('round', '-')}'s global model ({kept_why})",
     ]
     for k, v in extra.items():
         lines.append(f"- {k.replace('_', ' ')}: {_fmt(v)}")
     lines += [
         "",
-        "| round | global accuracy | global loss | drones ok | drones failed | seconds |",
-        "|---|---|---|---|---|---|",
+        "| round | global accuracy | global loss | validation loss | drones ok "
+        "| drones failed | seconds |",
+        "|---|---|---|---|---|---|---|",
     ]
     for r in rounds:
         lines.append(
             f"| {r['round']} | {_fmt(r.get('global_accuracy'))} | {_fmt(r.get('global_loss'))} "
+            f"| {_fmt(r.get('val_loss'))} "
             f"| {r.get('clients_ok', '-')} | {r.get('clients_failed', '-')} "
             f"| {_fmt(r.get('duration_s'))} |"
         )

@@ -82,6 +82,10 @@ class FLConfig:
     # epoch's by its own small validation tail ("best"; 1 point worse, docs/federated.md),
     # or the mean of its weights after each epoch of the second half of the round ("mean")
     local_weights: Literal["best", "last", "mean"] = "last"
+    # the global model the run ends with: the last round's, or the round's whose model the
+    # drones' validation windows score best (lowest loss; needs fraction-evaluate > 0):
+    # the federated twin of centralised training's early stopping on its validation parts
+    keep_round: Literal["best", "last"] = "last"
     mirror: bool = False  # mirroring on the drones; no gain measured (docs/federated.md)
     # local epochs on capture-noised, One-Euro-smoothed windows (gesture/robust.py; the
     # partitions carry no history, so without the frame-rate and loss effects), or "none"
@@ -118,6 +122,11 @@ class FLConfig:
                 f"run config 'pipeline': only the scale-free 'body' and 'body-image' pipelines "
                 f"are supported for federated runs: the 'paper' MinMax pipeline would scale "
                 f"each drone with statistics only it has (got {self.pipeline!r})"
+            )
+        if self.keep_round == "best" and self.fraction_evaluate == 0:
+            raise ConfigError(
+                "run config 'keep-round': 'best' picks the round by federated evaluation, "
+                "so 'fraction-evaluate' must be above 0"
             )
         from proxima.gesture.models import MODELS
 

@@ -22,6 +22,11 @@ def _clean(value: Any) -> Any:
     return value
 
 
+def kept_round_row(rounds: list[dict[str, Any]], kept: int | None) -> dict[str, Any]:
+    """The record of round `kept` (the last round's when None or absent; {} if none)."""
+    return next((r for r in rounds if r["round"] == kept), rounds[-1] if rounds else {})
+
+
 class RunRecorder:
     """The strategy's `Recorder`: client results and statuses; rounds from the server."""
 
@@ -66,13 +71,18 @@ class RunRecorder:
         clients_ok: int = 0,
         clients_failed: int = 0,
         duration_s: float = 0.0,
+        val_loss: float | None = None,
+        val_accuracy: float | None = None,
     ) -> dict[str, Any]:
-        """Record the global model's score after a round (0: the initial model)."""
+        """Record the global model's score after a round (0: the initial model); `val_*`:
+        the drones' federated evaluation of it, when the run has one."""
         row = {
             "round": server_round,
             "global_accuracy": _clean(float(global_accuracy)),
             "global_loss": _clean(float(global_loss)),
             "train_loss": _clean(train_loss),
+            "val_loss": _clean(val_loss),
+            "val_accuracy": _clean(val_accuracy),
             "clients_ok": clients_ok,
             "clients_failed": clients_failed,
             "duration_s": round(duration_s, 3),

@@ -11,6 +11,7 @@ the simulation engine.
 from __future__ import annotations
 
 import logging
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,7 +22,7 @@ from flwr.serverapp import Grid, ServerApp
 
 from proxima.federated.config import ConfigError, FLConfig
 from proxima.federated.data import test_windows
-from proxima.federated.recorder import RunRecorder
+from proxima.federated.recorder import RunRecorder, kept_round_row
 from proxima.federated.strategy import DronesMissing, GuardedMixin, guarded
 from proxima.federated.task import Scorer, start_model
 
@@ -35,6 +36,11 @@ class ServerResult:
     card: Path | None = None
     error: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    kept_round: int | None = None  # the round whose global model the run ends with
+
+    def final(self) -> dict[str, Any]:
+        """The kept round's record (the last round's when none was kept)."""
+        return kept_round_row(self.rounds, self.kept_round)
 
 
 def _weights(arrays: ArrayRecord) -> dict[str, Any]:
@@ -56,12 +62,13 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
     strategy = guarded(cfg, recorder)
     assert isinstance(strategy, GuardedMixin)  # a Flower strategy with the guard mixed in
     result = ServerResult(rounds=recorder.rounds)
-    last: dict[str, Any] = {"arrays": initial}
+    kept: dict[str, Any] = {"arrays": initial, "round": 0, "val_loss": math.inf}
 
     def evaluate(server_round: int, arrays: ArrayRecord) -> MetricRecord:
         loss, acc = scorer(_weights(arrays))
         summary = strategy.train_summary.get(server_round, {})
         started = strategy.round_started.get(server_round)
+        val = strategy.evaluate_summary.get(server_round, {})
         recorder.round_done(
             server_round,
             global_accuracy=acc,
@@ -70,8 +77,13 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
             clients_ok=summary.get("ok", 0),
             clients_failed=summary.get("failed", 0),
             duration_s=time.monotonic() - started if started else 0.0,
+            val_loss=val.get("val_loss"),
+            val_accuracy=val.get("val_accuracy"),
         )
-        last["arrays"] = arrays
+        val_loss = val.get("val_loss")
+        better = val_loss is not None and val_loss < kept["val_loss"]
+        if cfg.keep_round == "last" or kept["round"] == 0 or better:
+            kept.update(arrays=arrays, round=server_round, val_loss=val_loss or math.inf)
         return MetricRecord({"accuracy": acc, "loss": loss})
 
     recorder.status("running", f"{cfg.strategy}, {cfg.rounds} rounds")
@@ -88,11 +100,12 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
         )
     except DronesMissing as exc:
         result.error = str(exc)
+    result.kept_round = kept["round"]
     if len(recorder.rounds) > 1 and cfg.models_dir:
         from proxima.federated.checkpoints import save_run_model
 
         result.checkpoint, result.card = save_run_model(
-            cfg, _weights(last["arrays"]), recorder.rounds, result.extra
+            cfg, _weights(kept["arrays"]), recorder.rounds, result.extra, kept=result.kept_round
         )
     return result
 
@@ -100,16 +113,24 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
 def finish(cfg: FLConfig, recorder: RunRecorder, result: ServerResult) -> None:
     """Write the run's outcome (status, checkpoint, final accuracy) to its record."""
     status = "failed" if result.error or len(result.rounds) <= 1 else "completed"
-    acc = result.rounds[-1]["global_accuracy"] if result.rounds else None
+    final = result.final()
+    acc = final.get("global_accuracy")
+    kept = (
+        f" (round {final['round']}'s model, kept by validation)"
+        if final and final is not result.rounds[-1]
+        else ""
+    )
     detail = result.error or (
         f"{len(result.rounds) - 1} rounds, global accuracy "
         + ("n/a" if acc is None else f"{acc:.3f}")
+        + kept
     )
     if recorder.store is not None:
         recorder.store.update_run(
             cfg.run_id,
             checkpoint=str(result.checkpoint) if result.checkpoint else None,
             model_card=str(result.card) if result.card else None,
+            **({"final_accuracy": acc} if acc is not None else {}),
         )
     recorder.status(status, detail)
 

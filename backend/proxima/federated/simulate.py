@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from proxima.federated.config import FLConfig
-from proxima.federated.recorder import RunRecorder
+from proxima.federated.recorder import RunRecorder, kept_round_row
 from proxima.store.training import TrainingStore
 
 log = logging.getLogger(__name__)
@@ -57,6 +57,7 @@ class SimulationResult:
     status: str = "completed"
     detail: str = ""
     config: dict[str, Any] = field(default_factory=dict)
+    kept_round: int | None = None  # the round whose global model the run ends with
 
     def to_json(self) -> dict[str, Any]:
         """The `proxima fl simulate --json` contract: `rounds` (each with `round`,
@@ -68,7 +69,8 @@ class SimulationResult:
             "detail": self.detail,
             "wall_s": round(self.wall_s, 2),
             "rounds": self.rounds,
-            "final_accuracy": self.rounds[-1]["global_accuracy"] if self.rounds else None,
+            "final_accuracy": kept_round_row(self.rounds, self.kept_round).get("global_accuracy"),
+            "kept_round": kept_round_row(self.rounds, self.kept_round).get("round"),
             "checkpoint": str(self.checkpoint) if self.checkpoint else None,
             "model_card": str(self.card) if self.card else None,
             "config": self.config,
@@ -129,4 +131,5 @@ def simulate(
         status=recorder.last_status,
         detail=result.error,
         config=cfg.to_run_config(),
+        kept_round=result.kept_round,
     )

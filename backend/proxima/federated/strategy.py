@@ -140,6 +140,7 @@ class GuardedMixin:
         self.suspects: set[int] = set()  # failed last round: skipped once
         self.round_started: dict[int, float] = {}
         self.train_summary: dict[int, dict[str, Any]] = {}
+        self.evaluate_summary: dict[int, dict[str, float | None]] = {}  # federated evaluation
 
     # waiting for drones ----------------------------------------------------------------
 
@@ -227,7 +228,13 @@ class GuardedMixin:
         accepted = self._screen(server_round, "evaluate", list(replies), check=False)
         if not accepted:
             return None
-        return super().aggregate_evaluate(server_round, accepted)  # type: ignore[misc]
+        metrics = super().aggregate_evaluate(server_round, accepted)  # type: ignore[misc]
+        if metrics is not None:  # the mean over the drones' validation windows
+            self.evaluate_summary[server_round] = {
+                "val_loss": _f(metrics.get("loss")),
+                "val_accuracy": _f(metrics.get("accuracy")),
+            }
+        return metrics
 
     # screening -----------------------------------------------------------------------------
 
