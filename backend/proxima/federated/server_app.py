@@ -81,9 +81,9 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
             val_accuracy=val.get("val_accuracy"),
         )
         val_loss = val.get("val_loss")
-        better = val_loss is not None and val_loss < kept["val_loss"]
-        if cfg.keep_round == "last" or kept["round"] == 0 or better:
-            kept.update(arrays=arrays, round=server_round, val_loss=val_loss or math.inf)
+        val_loss = math.inf if val_loss is None else val_loss  # a round no drone scored
+        if cfg.keep_round == "last" or kept["round"] == 0 or val_loss < kept["val_loss"]:
+            kept.update(arrays=arrays, round=server_round, val_loss=val_loss)
         return MetricRecord({"accuracy": acc, "loss": loss})
 
     recorder.status("running", f"{cfg.strategy}, {cfg.rounds} rounds")
