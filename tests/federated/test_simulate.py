@@ -76,7 +76,7 @@ def test_keep_round_best_ends_with_the_round_the_drones_validation_scores_best(
     from proxima.federated.simulate import simulate
     from proxima.federated.task import Scorer
 
-    with pytest.raises(ConfigError, match="keep-round.*fraction-evaluate"):
+    with pytest.raises(ConfigError, match=r"keep-round.*fraction-evaluate"):
         fast_config(keep_round="best")
     cfg = fast_config(rounds=3, keep_round="best", fraction_evaluate=1.0,
                       models_dir=str(tmp_path / "models"))  # fmt: skip
