@@ -69,6 +69,7 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
         summary = strategy.train_summary.get(server_round, {})
         started = strategy.round_started.get(server_round)
         val = strategy.evaluate_summary.get(server_round, {})
+        val_loss = val.get("val_loss")
         recorder.round_done(
             server_round,
             global_accuracy=acc,
@@ -77,13 +78,12 @@ def run_server(grid: Grid, cfg: FLConfig, recorder: RunRecorder) -> ServerResult
             clients_ok=summary.get("ok", 0),
             clients_failed=summary.get("failed", 0),
             duration_s=time.monotonic() - started if started else 0.0,
-            val_loss=val.get("val_loss"),
+            val_loss=val_loss,
             val_accuracy=val.get("val_accuracy"),
         )
-        val_loss = val.get("val_loss")
-        val_loss = math.inf if val_loss is None else val_loss  # a round no drone scored
-        if cfg.keep_round == "last" or kept["round"] == 0 or val_loss < kept["val_loss"]:
-            kept.update(arrays=arrays, round=server_round, val_loss=val_loss)
+        score = math.inf if val_loss is None else val_loss  # a round no drone scored
+        if cfg.keep_round == "last" or kept["round"] == 0 or score < kept["val_loss"]:
+            kept.update(arrays=arrays, round=server_round, val_loss=score)
         return MetricRecord({"accuracy": acc, "loss": loss})
 
     recorder.status("running", f"{cfg.strategy}, {cfg.rounds} rounds")
