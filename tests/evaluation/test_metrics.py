@@ -4,6 +4,7 @@ scored on its own, and the confusion picture, for a briefly trained checkpoint."
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 from typer.testing import CliRunner
@@ -35,4 +36,30 @@ def test_evaluate_writes_the_named_fields_and_a_confusion_png(
     assert abs(overall - m["accuracy"]) < 1e-9
     # four epochs on coarse windows already learn far above chance (1/13)
     assert m["accuracy"] > 0.3
+    assert out.with_suffix(".png").stat().st_size > 10_000
+
+
+def test_evaluate_scores_an_ensemble_of_comma_joined_checkpoints(
+    small_checkpoint, laser_dir, tmp_path
+) -> None:
+    """`--checkpoint a.pt,b.pt` scores the mean of the members' calibrated probabilities,
+    as the engine runs an ensemble: two copies of one model score as that model, and a
+    second, different member changes the result."""
+    from proxima.evaluation.metrics import evaluate_checkpoint
+
+    one = evaluate_checkpoint(small_checkpoint, [str(laser_dir)], "cross-view:l", stride=12)
+    twice = evaluate_checkpoint(f"{small_checkpoint},{small_checkpoint}", [str(laser_dir)],
+                                "cross-view:l", stride=12)  # fmt: skip
+    assert twice["confusion"] == one["confusion"] and twice["windows"] == one["windows"]
+    assert twice["model"] == "tcn+tcn"
+    shipped = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
+    pair = f"{small_checkpoint},{shipped}"
+    out = tmp_path / "pair.json"
+    result = CliRunner().invoke(app, ["evaluate", "--checkpoint", pair, "--data", str(laser_dir),
+                                      "--split", "cross-view:l", "--stride", "12",
+                                      "--json", str(out)])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    m = json.loads(out.read_text())
+    alone = evaluate_checkpoint(shipped, [str(laser_dir)], "cross-view:l", stride=12)
+    assert m["confusion"] != one["confusion"] and m["confusion"] != alone["confusion"]
     assert out.with_suffix(".png").stat().st_size > 10_000

@@ -29,7 +29,12 @@ def _fail(exc: Exception) -> NoReturn:
 
 
 def evaluate(
-    checkpoint: Annotated[Path, typer.Option(help="Checkpoint from `proxima train`.")],
+    checkpoint: Annotated[
+        Path,
+        typer.Option(
+            help="Checkpoint from `proxima train`; comma-joined paths score their ensemble."
+        ),
+    ],
     json_out: Annotated[Path, typer.Option("--json", help="Where to write the metrics JSON.")],
     data: DataOpt = None,
     split: SplitOpt = "temporal",
@@ -46,9 +51,11 @@ def evaluate(
         _fail(exc)
     json_out.parent.mkdir(parents=True, exist_ok=True)
     json_out.write_text(json.dumps(result, indent=1))
+    members = str(checkpoint).count(",") + 1
+    name = checkpoint.name if members == 1 else f"ensemble of {members}"
     png = plot_confusion(
         result["confusion"], json_out.with_suffix(".png"),
-        f"{checkpoint.name} on {split}: accuracy {result['accuracy']:.3f}",
+        f"{name} on {split}: accuracy {result['accuracy']:.3f}",
     )  # fmt: skip
     views = ", ".join(f"{v} {r['accuracy']:.3f}" for v, r in result["per_view"].items())
     typer.echo(

@@ -13,6 +13,7 @@ import numpy as np
 from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.clip import Clip
 from proxima.gesture.datasets import load_data
+from proxima.gesture.ensemble import EnsembleClassifier
 from proxima.gesture.train import features, predict_proba
 from proxima.gesture.windows import Windows, make_windows, split_clips
 from proxima.types import GESTURES
@@ -63,13 +64,23 @@ def accuracy_by(group: np.ndarray, y_true: np.ndarray, y_pred: np.ndarray) -> di
     }  # fmt: skip
 
 
+def window_probs(clf: GestureClassifier | EnsembleClassifier, windows: Windows) -> np.ndarray:
+    """Probabilities (N, 13) for `windows`: a model's softmax, or an ensemble's mean of
+    its members' calibrated probabilities (as the engine runs it)."""
+    if isinstance(clf, EnsembleClassifier):
+        probs = [predict_proba(m.model, features(m.pipeline, windows), temperature=m.temperature)
+                 for m in clf.members]  # fmt: skip
+        return np.mean(probs, axis=0)
+    return predict_proba(clf.model, features(clf.pipeline, windows))
+
+
 def score_windows(
-    clf: GestureClassifier, windows: Windows, clips: Sequence[Clip]
+    clf: GestureClassifier | EnsembleClassifier, windows: Windows, clips: Sequence[Clip]
 ) -> dict[str, Any]:
     """`metrics` of `clf` on `windows` (made from `clips`), plus the accuracy per camera
     view (`per_view`): the LASER side views are where models are weakest. The windows
     may be altered first (noise, dropped frames), as a robustness check does."""
-    probs = predict_proba(clf.model, features(clf.pipeline, windows))
+    probs = window_probs(clf, windows)
     result = metrics(windows.labels, probs, windows.clip)
     view_of = {c.name: c.view for c in clips}
     views = np.array([view_of[windows.clip_names[c]] for c in windows.clip])
@@ -85,13 +96,16 @@ def evaluate_checkpoint(
     max_gap: int = 5,
 ) -> dict[str, Any]:
     """Metrics of a checkpoint on a split's test windows (see `score_windows`); for the
-    split `all`, which has no test part, on the training data itself.
+    split `all`, which has no test part, on the training data itself. Comma-joined paths
+    (`a.pt,b.pt`) score their ensemble, as the engine loads it.
 
     Raises:
-        FileNotFoundError, ValueError: the checkpoint is missing or not a checkpoint.
+        FileNotFoundError, ValueError: the checkpoint is missing or not a checkpoint, or
+            ensemble members disagree on window or labels.
         proxima.gesture.clip.DataError: the data cannot be loaded or split.
     """
-    clf = GestureClassifier.load(checkpoint)
+    paths = [p.strip() for p in str(checkpoint).split(",") if p.strip()]
+    clf = EnsembleClassifier.load(paths) if len(paths) > 1 else GestureClassifier.load(checkpoint)
     data = load_data(data_specs)
     parts = split_clips(data.clips, split, clf.window, data.uav_dir)
     test = parts.test if parts.test else parts.train
