@@ -61,13 +61,9 @@ def load_classifier(path: str | Path | None) -> Classifier:
         ValueError: the file is not a Proxima gesture checkpoint, or ensemble members
             disagree on window or labels.
     """
-    from proxima.gesture.classifier import GestureClassifier
+    from proxima.gesture.ensemble import load_checkpoint
 
-    if path is not None and "," in str(path):
-        from proxima.gesture.ensemble import EnsembleClassifier
-
-        return EnsembleClassifier.load([p.strip() for p in str(path).split(",") if p.strip()])
-    return GestureClassifier.load(path)
+    return load_checkpoint(path)
 
 
 class Engine:

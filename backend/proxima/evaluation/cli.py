@@ -51,7 +51,7 @@ def evaluate(
         _fail(exc)
     json_out.parent.mkdir(parents=True, exist_ok=True)
     json_out.write_text(json.dumps(result, indent=1))
-    members = str(checkpoint).count(",") + 1
+    members = result["model"].count("+") + 1  # an ensemble's model is "tcn+tcn+..."
     name = checkpoint.name if members == 1 else f"ensemble of {members}"
     png = plot_confusion(
         result["confusion"], json_out.with_suffix(".png"),

@@ -13,7 +13,7 @@ import numpy as np
 from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.clip import Clip
 from proxima.gesture.datasets import load_data
-from proxima.gesture.ensemble import EnsembleClassifier
+from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
 from proxima.gesture.train import features, predict_proba
 from proxima.gesture.windows import Windows, make_windows, split_clips
 from proxima.types import GESTURES
@@ -67,7 +67,7 @@ def accuracy_by(group: np.ndarray, y_true: np.ndarray, y_pred: np.ndarray) -> di
 def window_probs(clf: GestureClassifier | EnsembleClassifier, windows: Windows) -> np.ndarray:
     """Probabilities (N, 13) for `windows`: a model's softmax, or an ensemble's mean of
     its members' calibrated probabilities (as the engine runs it)."""
-    if isinstance(clf, EnsembleClassifier):
+    if isinstance(clf, EnsembleClassifier):  # EnsembleClassifier.predict, with each window's has_z
         probs = [predict_proba(m.model, features(m.pipeline, windows), temperature=m.temperature)
                  for m in clf.members]  # fmt: skip
         return np.mean(probs, axis=0)
@@ -104,8 +104,7 @@ def evaluate_checkpoint(
             ensemble members disagree on window or labels.
         proxima.gesture.clip.DataError: the data cannot be loaded or split.
     """
-    paths = [p.strip() for p in str(checkpoint).split(",") if p.strip()]
-    clf = EnsembleClassifier.load(paths) if len(paths) > 1 else GestureClassifier.load(checkpoint)
+    clf = load_checkpoint(checkpoint)
     data = load_data(data_specs)
     parts = split_clips(data.clips, split, clf.window, data.uav_dir)
     test = parts.test if parts.test else parts.train

@@ -47,3 +47,17 @@ class EnsembleClassifier:
         """Mean softmax probabilities (N, 13) of the members for windows (N, W, 33, 3)."""
         probs = [m.predict(xyz, aspect) for m in self.members]
         return np.mean(probs, axis=0)
+
+
+def load_checkpoint(path: str | Path | None) -> GestureClassifier | EnsembleClassifier:
+    """The classifier at `path` (default: the shipped checkpoint); comma-joined paths
+    (`a.pt,b.pt,c.pt`) are an ensemble of those checkpoints.
+
+    Raises:
+        FileNotFoundError: no such checkpoint.
+        ValueError: the file is not a Proxima gesture checkpoint, or ensemble members
+            disagree on window or labels.
+    """
+    if path is not None and "," in str(path):
+        return EnsembleClassifier.load([p.strip() for p in str(path).split(",") if p.strip()])
+    return GestureClassifier.load(path)
