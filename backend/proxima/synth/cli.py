@@ -31,6 +31,23 @@ def synth(
     overwrite: Annotated[
         bool, typer.Option("--overwrite", help="Replace a synthetic data set already in --out.")
     ] = False,
+    seen_by: Annotated[
+        str,
+        typer.Option(
+            help="Who reports the landmarks: 'geometry' (the exact projection, fast) or "
+            "'mediapipe' (each frame rendered and passed through the real pose model, "
+            "~40 ms a frame: its guesses for hidden limbs, its noise and misses).",
+        ),
+    ] = "geometry",
+    pose_model: Annotated[
+        Path | None, typer.Option(help="Pose model for --seen-by mediapipe (default: found).")
+    ] = None,
+    render_width: Annotated[
+        int, typer.Option(help="Rendered picture width for --seen-by mediapipe.")
+    ] = 640,
+    max_frames: Annotated[
+        int | None, typer.Option(help="Keep each clip's first N frames (default: all).")
+    ] = None,
 ) -> None:
     """Make synthetic operators perform the 13 gestures before virtual cameras; write each
     clip as a LASER-format CSV, plus manifest.json (body, camera and gesture parameters).
@@ -54,6 +71,22 @@ def synth(
         )
         raise typer.Exit(2)
     size = (int(width), int(height))
+    from proxima.pose.model import PoseModelError
+    from proxima.synth.dataset import GeometricSeer, Seer
+
+    seer: Seer
+    try:
+        if seen_by == "mediapipe":
+            from proxima.synth.pose_model import PoseModelSeer
+
+            seer = PoseModelSeer(pose_model, render_width, max_frames, fps)
+        elif seen_by == "geometry":
+            seer = GeometricSeer(max_frames)
+        else:
+            raise ValueError(f"--seen-by {seen_by!r}: expected 'geometry' or 'mediapipe'")
+    except (ValueError, PoseModelError) as exc:
+        typer.secho(f"error: {exc}", fg="red", err=True)
+        raise typer.Exit(2) from None
     command = "proxima " + shlex.join(sys.argv[1:])
     with Progress(
         TextColumn("[bold]synth[/]"),
@@ -75,6 +108,7 @@ def synth(
                 view_ranges,
                 fps,
                 size,
+                seer=seer,
                 overwrite=overwrite,
                 on_clip=on_clip,
                 command=command,

@@ -32,6 +32,7 @@ from proxima.gesture.clip import Clip, DataError
 from proxima.gesture.laser import load_laser_csv
 from proxima.synth.anthropometry import BodyShape, sample_body
 from proxima.synth.body import Placement, Stance, world_landmarks
+from proxima.synth.camera import Camera
 from proxima.synth.motion import IDLE_LABEL, Performance, draw_gesture, perform
 from proxima.synth.projection import ImageLandmarks, project_landmarks
 from proxima.synth.views import DEFAULT_VIEWS, CameraDraw, ViewRange, sample_camera
@@ -42,6 +43,36 @@ MANIFEST = "manifest.json"
 SOURCE = "synth"
 FPS = 30.0
 CSV_HEADER = ",counter_frame,i,x,y,z,visibility"
+
+
+class Seer(Protocol):
+    """What reports a clip's landmarks from its world poses (T, 33, 3) and camera: the
+    geometric projection (the default) or the real pose model on rendered pictures
+    (`pose_model.PoseModelSeer`)."""
+
+    def __call__(
+        self, world: np.ndarray, camera: Camera, body: BodyShape, rng: np.random.Generator
+    ) -> ImageLandmarks: ...
+
+    def describe(self) -> str: ...
+
+
+class GeometricSeer:
+    """The exact landmarks through `projection.project_landmarks`, of each clip's first
+    `max_frames` frames (all when None)."""
+
+    def __init__(self, max_frames: int | None = None) -> None:
+        if max_frames is not None and max_frames < 1:
+            raise ValueError(f"max_frames must be at least 1, got {max_frames}")
+        self.max_frames = max_frames
+
+    def __call__(
+        self, world: np.ndarray, camera: Camera, body: BodyShape, rng: np.random.Generator
+    ) -> ImageLandmarks:
+        return project_landmarks(world[: self.max_frames], camera, body)
+
+    def describe(self) -> str:
+        return "geometry"
 
 
 class CaptureModel(Protocol):
@@ -150,13 +181,15 @@ def generate(
     fps: float = FPS,
     resolution: tuple[int, int] = (1920, 1080),
     capture: CaptureModel | None = None,
+    seer: Seer | None = None,
     overwrite: bool = False,
     on_clip: Callable[[int, str], None] | None = None,
     command: str = "",
 ) -> dict[str, Any]:
     """Write a synthetic data set to `out` and return its manifest.
 
-    Files are written to a temporary folder beside `out` and moved into place at the
+    `seer` reports the landmarks (default: the geometric projection); the manifest names
+    it. Files are written to a temporary folder beside `out` and moved into place at the
     end, so a failed run leaves nothing half-written.
 
     Raises:
@@ -164,6 +197,7 @@ def generate(
             a synthetic data set (or is one and `overwrite` is off).
     """
     out = Path(out)
+    seer = seer or GeometricSeer()
     if clips < 1:
         raise ValueError(f"--clips must be at least 1, got {clips}")
     if not views:
@@ -188,7 +222,12 @@ def generate(
             scene = scenes[index]
             perf = perform_clip(scene, gesture_name, seed, fps)
             world = world_landmarks(scene.body, perf.posture, scene.placement, scene.stance)
-            seen = project_landmarks(world, scene.camera.camera, scene.body)
+            seen = seer(
+                world,
+                scene.camera.camera,
+                scene.body,
+                np.random.default_rng([seed, index, 200 + gesture]),
+            )
             name = f"synth-s{seed}-{k + 1:05d}_{gesture_name}_{scene.camera.laser_view}"
             clip = image_clip(name, gesture_name, scene, seen)
             if capture is not None:
@@ -205,7 +244,7 @@ def generate(
                     "subject": scene.subject,
                     "view": scene.camera.laser_view,
                     "view_name": scene.camera.view,
-                    "frames": len(perf),
+                    "frames": len(seen.detected),
                     "detected": len(clip),
                     "aspect": round(seen.aspect, 6),
                     "segments": [
@@ -226,6 +265,7 @@ def generate(
             "resolution": list(resolution),
             "views": [v.spec() for v in views],
             "capture": None if capture is None else type(capture).__name__,
+            "seen_by": seer.describe(),
             "seconds": round(time.perf_counter() - t0, 2),
             "scenes": [s.to_dict() for s in scenes],
             "clip_list": entries,
