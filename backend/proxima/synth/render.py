@@ -9,8 +9,9 @@ data with MediaPipe's own guesses, noise and misses.
 The mannequin: capsules for the limbs (the body's own radii), hands (a palm and a
 thumb), feet and the torso's sides, ellipsoids for the chest and the head, with a face
 (eyes, brows, mouth) and hair so the pose detector finds a person; flat colours for skin,
-shirt, trousers, shoes and hair per person (`sample_look`), Lambert shading, a ground
-plane with a checker texture, sky, and pixel noise. Every ray is cast only inside the
+shirt, trousers, shoes and hair per person (`sample_look`), Lambert shading lit from
+above and behind the camera, a ground plane with a checker texture, sky, and pixel
+noise. Every ray is cast only inside the
 body's box in the image, and each primitive only inside its own box.
 """
 
@@ -47,7 +48,7 @@ class Look:
     hair: tuple[float, float, float]
     sky: tuple[float, float, float]
     ground: tuple[float, float, float]
-    light: tuple[float, float, float]  # direction towards the light (world, NED)
+    light: tuple[float, float, float]  # the light's offset from behind the camera (NED)
 
     def colour(self, part: str) -> np.ndarray:
         shoe = (30.0, 30.0, 30.0)
@@ -62,17 +63,8 @@ def _rgb(v: np.ndarray) -> tuple[float, float, float]:
 
 def sample_look(rng: np.random.Generator) -> Look:
     """A random person's colours and a daylight scene: any skin tone, any shirt, darker
-    trousers, dark hair; the sun above, from any bearing."""
+    trousers, dark hair; light from above and behind the camera, a little off."""
     skin = SKIN_TONES[rng.integers(len(SKIN_TONES))] * rng.uniform(0.9, 1.05)
-    bearing = rng.uniform(0, 2 * np.pi)
-    elevation = rng.uniform(np.deg2rad(25), np.deg2rad(75))
-    light = np.array(
-        [
-            np.cos(elevation) * np.cos(bearing),
-            np.cos(elevation) * np.sin(bearing),
-            -np.sin(elevation),
-        ]
-    )
     return Look(
         skin=_rgb(np.minimum(skin, 255)),
         shirt=_rgb(rng.uniform(30, 230, 3)),
@@ -80,7 +72,7 @@ def sample_look(rng: np.random.Generator) -> Look:
         hair=_rgb(rng.uniform(10, 90) * np.array([1.0, 0.8, 0.6])),
         sky=_rgb(np.array([170.0, 195.0, 225.0]) * rng.uniform(0.85, 1.1)),
         ground=_rgb(np.array([95.0, 120.0, 80.0]) * rng.uniform(0.7, 1.3)),
-        light=_rgb(light),
+        light=_rgb(rng.normal(0.0, 0.2, 3)),
     )
 
 
@@ -259,7 +251,9 @@ class Renderer:
         ground = (down > 1e-6) & (t > 0)
         p = self.origin + self.rays[ground] * t[ground, None]
         checker = (np.floor(p[:, 0] * 2) + np.floor(p[:, 1] * 2)) % 2
-        self.background[ground] = np.asarray(look.ground) * (0.9 + 0.075 * checker)[:, None]
+        self.background[ground] = np.asarray(look.ground) * (0.925 + 0.075 * checker)[:, None]
+        # Light from behind the camera and above (NED: up is -z), offset per scene.
+        self.light = _unit(-self.rotation[2] + np.array([0.0, 0.0, -0.6]) + look.light)
 
     def _box(self, points: np.ndarray, radius: float) -> tuple[int, int, int, int] | None:
         """The pixel box (x0, y0, x1, y1) that holds `points` (N, 3) grown by `radius`
@@ -306,7 +300,7 @@ class Renderer:
             points = self.origin + rays * np.where(seen, best, 0.0)[:, None]
             face = seen & is_head
             col[face] = _face(points[face], lm, self.look)
-            shade = 0.4 + 0.6 * np.clip(normal @ np.asarray(self.look.light), 0, 1)
+            shade = 0.35 + 0.65 * np.clip(normal @ self.light, 0, 1)
             sub_img = img[idx]
             sub_img[seen] = col[seen] * shade[seen, None]
             img[idx] = sub_img
