@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from proxima.gesture.skeleton import BONES
-from proxima.synth.anthropometry import sample_body
+from proxima.synth.anthropometry import BodyShape, sample_body
 from proxima.synth.body import Placement, Stance, world_landmarks
 from proxima.synth.camera import Camera
 from proxima.synth.motion import IDLE_LABEL, draw_gesture, perform
@@ -58,6 +58,20 @@ def _frustum(cam: Camera, depth: float) -> np.ndarray:
     return np.array(pts)
 
 
+def right_handed_operator(
+    gesture: str, seed: int, idle_s: float = 0.5
+) -> tuple[np.random.Generator, BodyShape, Placement, np.ndarray]:
+    """The pictures' operator: a right-handed man facing north, `idle_s` of idle stance
+    then `gesture`; returns the generator (for further draws), body, placement and world
+    landmarks (T, 33, 3)."""
+    rng = np.random.default_rng(seed)
+    body = sample_body(rng, sex="male", handedness="right")
+    placement = Placement(heading_deg=0.0)
+    steps = [draw_gesture(IDLE_LABEL, rng, duration_s=idle_s), draw_gesture(gesture, rng)]
+    perf = perform(steps, rng, head_turn_deg=0.0)
+    return rng, body, placement, world_landmarks(body, perf.posture, placement, Stance())
+
+
 def render(out: Path, gesture: str = "move_to_left", seed: int = 0) -> Path:
     """Draw the picture and save it as a PNG."""
     import matplotlib
@@ -65,12 +79,7 @@ def render(out: Path, gesture: str = "move_to_left", seed: int = 0) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rng = np.random.default_rng(seed)
-    body = sample_body(rng, sex="male", handedness="right")
-    placement = Placement(heading_deg=0.0)
-    steps = [draw_gesture(IDLE_LABEL, rng, duration_s=0.5), draw_gesture(gesture, rng)]
-    perf = perform(steps, rng, head_turn_deg=0.0)
-    world = world_landmarks(body, perf.posture, placement, Stance())
+    _, body, placement, world = right_handed_operator(gesture, seed)
     chest = 0.55 * body.stature
     cams = {
         "front camera\nazimuth 0, elevation 5, 4 m": orbit_camera(

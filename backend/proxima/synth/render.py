@@ -235,7 +235,7 @@ class Renderer:
     ) -> None:
         if width < 16 or height < 16:
             raise ValueError(f"render size must be at least 16x16, got {width}x{height}")
-        self.camera, self.look, self.width, self.height = camera, look, width, height
+        self.look, self.width, self.height = look, width, height
         self.focal = camera.focal_px * width / camera.width
         self.rotation = camera.world_to_camera()
         self.origin = np.asarray(camera.position, np.float64)

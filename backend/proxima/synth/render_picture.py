@@ -20,9 +20,7 @@ import cv2
 import numpy as np
 
 from proxima.gesture.skeleton import BONES
-from proxima.synth.anthropometry import sample_body
-from proxima.synth.body import Placement, Stance, world_landmarks
-from proxima.synth.motion import IDLE_LABEL, draw_gesture, perform
+from proxima.synth.picture import right_handed_operator
 from proxima.synth.projection import project_landmarks
 from proxima.synth.render import Renderer, sample_look
 from proxima.synth.views import orbit_camera
@@ -37,11 +35,8 @@ def render(out: Path, gesture: str = "have_command", seed: int = 0) -> Path:
 
     from proxima.pose.estimator import PoseEstimator
 
-    rng = np.random.default_rng(seed)
-    body = sample_body(rng, sex="male", handedness="right")
-    placement = Placement(heading_deg=0.0)
-    steps = [draw_gesture(IDLE_LABEL, rng, duration_s=0.6), draw_gesture(gesture, rng)]
-    world = world_landmarks(body, perform(steps, rng).posture, placement, Stance())[:150]
+    rng, body, placement, world = right_handed_operator(gesture, seed, idle_s=0.6)
+    world = world[:150]
     chest = 0.55 * body.stature
     cams = {
         "front, 5 deg up, 4 m": orbit_camera(placement, chest, 0.0, 5.0, 4.0, hfov_deg=65.0),
