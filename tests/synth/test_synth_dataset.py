@@ -11,6 +11,7 @@ import pytest
 
 from proxima.gesture.clip import DataError
 from proxima.gesture.laser import load_laser_csv, load_laser_dir
+from proxima.synth import dataset
 from proxima.synth.dataset import MANIFEST, generate, load_synth_dir
 from proxima.synth.views import parse_view
 from proxima.types import GESTURES
@@ -102,3 +103,21 @@ def test_a_missing_or_wrong_file_is_named(tmp_path: Path) -> None:
     (out / MANIFEST).write_text("{not json")
     with pytest.raises(DataError, match="unreadable manifest"):
         load_synth_dir(out)
+
+
+def test_a_variant_changes_only_its_own_gestures_clips(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Part of the `have_command` clips take its variant (the manifest says which); the
+    variant's own draw leaves every clip of the other gestures as it was without it."""
+    m = generate(tmp_path / "with", clips=52, seed=5)
+    monkeypatch.setattr(dataset, "VARIANT_SHARE", 0.0)
+    generate(tmp_path / "without", clips=52, seed=5)
+    for e in m["clip_list"]:
+        same = (tmp_path / "with" / e["file"]).read_bytes() == (
+            tmp_path / "without" / e["file"]
+        ).read_bytes()
+        form = e["steps"][1]["variant"]
+        assert same == (not form), e["name"]
+        assert not form or e["gesture"] == "have_command"
+    assert sum(e["steps"][1]["variant"] for e in m["clip_list"]) >= 1

@@ -72,13 +72,14 @@ def test_a_broken_pose_is_reported() -> None:
 
 @pytest.mark.parametrize("handedness", ["right", "left"])
 def test_no_generated_gesture_breaks_the_limits(handedness: str) -> None:
-    """Every gesture on varied bodies, with the performance's random variation and
-    idle transitions, stays inside the shoulder and elbow limits."""
+    """Every gesture (and its variant, where it has one) on varied bodies, with the
+    performance's random variation and idle transitions, stays inside the shoulder and
+    elbow limits."""
     rng = np.random.default_rng(1 if handedness == "right" else 2)
-    for _ in range(3):
+    for k in range(4):
         body = sample_body(rng, handedness=handedness)  # type: ignore[arg-type]
         steps = [draw_gesture(IDLE_LABEL, rng, duration_s=0.5)]
-        steps += [draw_gesture(g, rng, body.handedness) for g in GESTURES]
+        steps += [draw_gesture(g, rng, body.handedness, variant=k % 2 == 1) for g in GESTURES]
         perf = perform(steps, rng)
         lm = body_landmarks(body, perf.posture)
         assert limit_violations(lm) == []

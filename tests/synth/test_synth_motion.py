@@ -70,3 +70,25 @@ def test_a_seed_gives_the_same_performance() -> None:
 
     np.testing.assert_array_equal(run(5), run(5))
     assert not np.array_equal(run(5), run(6))
+
+
+def test_have_command_has_a_lower_forward_variant() -> None:
+    """The variant raises the fist ahead to just above the shoulder (as LASER's operator
+    does), the written form above the head; gestures without one ignore `variant`."""
+    body = nominal_body()
+
+    def top_of_wrist(variant: bool) -> np.ndarray:
+        rng = np.random.default_rng(3)
+        draw = draw_gesture("have_command", rng, variant=variant)
+        assert draw.variant is variant
+        lm = body_landmarks(body, perform([draw], rng).posture)
+        shoulder = lm[:, 12]
+        torso = np.linalg.norm((lm[0, 11] + lm[0, 12]) / 2 - (lm[0, 23] + lm[0, 24]) / 2)
+        rel = (lm[:, 16] - shoulder) / torso  # (forward, left, up) in torso lengths
+        return rel[np.argmax(rel[:, 2])]
+
+    written, variant = top_of_wrist(False), top_of_wrist(True)
+    assert written[2] > 0.7  # above the head
+    assert 0.0 < variant[2] < 0.6 and variant[0] > 0.6  # ahead, just above the shoulder
+    a = draw_gesture("hover", np.random.default_rng(5), variant=True)
+    assert a == draw_gesture("hover", np.random.default_rng(5)) and not a.variant

@@ -42,6 +42,8 @@ FORMAT = "proxima-synth/1"
 MANIFEST = "manifest.json"
 SOURCE = "synth"
 FPS = 30.0
+# Share of a gesture's clips that show its other form, where it has one (GestureSpec.variant).
+VARIANT_SHARE = 0.5
 CSV_HEADER = ",counter_frame,i,x,y,z,visibility"
 
 
@@ -128,11 +130,15 @@ def make_scene(
 
 
 def perform_clip(scene: Scene, gesture: str, seed: int, fps: float = FPS) -> Performance:
-    """The performance of one clip: a short idle stance, then the gesture."""
-    rng = np.random.default_rng([seed, scene.index, 1 + GESTURES.index(gesture)])
+    """The performance of one clip: a short idle stance, then the gesture (in its other
+    form, where it has one, in `VARIANT_SHARE` of the clips)."""
+    g = GESTURES.index(gesture)
+    rng = np.random.default_rng([seed, scene.index, 1 + g])
+    # Its own draw, so that adding a variant leaves every other gesture's clips as they were.
+    variant = bool(np.random.default_rng([seed, scene.index, 300 + g]).random() < VARIANT_SHARE)
     steps = [
         draw_gesture(IDLE_LABEL, rng, duration_s=float(rng.uniform(0.2, 1.0))),
-        draw_gesture(gesture, rng, scene.body.handedness),
+        draw_gesture(gesture, rng, scene.body.handedness, variant=variant),
     ]
     # The operator looks toward the camera, partly turning the head.
     head = float(np.clip(-scene.camera.azimuth_deg * rng.uniform(0.2, 0.7), -60, 60))

@@ -72,6 +72,9 @@ class GestureSpec:
     plane: str = ""
     extent: str = ""
     signal: str = ""  # the written marshalling signal it comes from
+    # Another way people make it: (right, left) arm motions that a data set draws instead
+    # for part of its clips (`dataset.VARIANT_SHARE`).
+    variant: tuple[ArmMotion, ArmMotion] | None = None
 
     @property
     def repeated(self) -> bool:
@@ -123,6 +126,13 @@ SPECS: dict[str, GestureSpec] = {
             plane="forward (sagittal)",
             extent="from hanging to the fist raised ahead above the head",
             signal="fist raised (I have command)",
+            # The variant: the fist raised ahead to just above the shoulder, as LASER's
+            # operator does (side views' top: elbow 0.47 torso lengths ahead at shoulder
+            # height, wrist 0.88 ahead and 0.3 up).
+            variant=(
+                ArmMotion(IDLE, arm(plane=65, elevation=100, rotation=0, elbow=30)),
+                ArmMotion(IDLE),
+            ),
         ),
         GestureSpec(
             "hover",

@@ -56,6 +56,7 @@ class GestureDraw:
     lag_cycles: float = 0.0  # the left arm's delay behind the right
     hesitation_at_s: float = 0.0  # where a pause starts (within the step)
     hesitation_s: float = 0.0
+    variant: bool = False  # the gesture's other form (`GestureSpec.variant`)
 
     def to_dict(self) -> dict[str, object]:
         def r(v: object) -> object:
@@ -85,8 +86,10 @@ def draw_gesture(
     rng: np.random.Generator,
     handedness: Hand = "right",
     duration_s: float | None = None,
+    variant: bool = False,
 ) -> GestureDraw:
-    """Draw one performance of `gesture` ("" for an idle stance).
+    """Draw one performance of `gesture` ("" for an idle stance); `variant` makes the
+    gesture's other form where it has one (`GestureSpec.variant`).
 
     Raises:
         ValueError: unknown gesture.
@@ -98,7 +101,11 @@ def draw_gesture(
     if gesture not in SPECS:
         raise ValueError(f"unknown gesture {gesture!r}; choose from {', '.join(GESTURES)}")
     spec = SPECS[gesture]
-    right, left = spec.right, spec.left
+    if variant and spec.variant is not None:
+        right, left = spec.variant
+    else:
+        right, left = spec.right, spec.left
+        variant = False
     if spec.handed and handedness == "left":
         right, left = left, right
     rest_r, rest_l = _jitter(rng, right.rest), _jitter(rng, left.rest)
@@ -115,6 +122,7 @@ def draw_gesture(
             rest_l,
             hesitation_at_s=float(rng.uniform(0.2, 0.8) * d),
             hesitation_s=hes_s,
+            variant=variant,
         )
     period = float(rng.uniform(*spec.period_s))
     if duration_s is not None:
@@ -138,6 +146,7 @@ def draw_gesture(
         lag_cycles=float(rng.normal(0.0, 0.03)),
         hesitation_at_s=half * period / 2,
         hesitation_s=hes_s,
+        variant=variant,
     )
 
 
