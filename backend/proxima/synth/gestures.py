@@ -130,7 +130,7 @@ SPECS: dict[str, GestureSpec] = {
             # operator does (side views' top: elbow 0.47 torso lengths ahead at shoulder
             # height, wrist 0.88 ahead and 0.3 up).
             variant=(
-                ArmMotion(IDLE, arm(plane=65, elevation=100, rotation=0, elbow=30)),
+                ArmMotion(IDLE, arm(plane=65, elevation=100, rotation=0, elbow=30, pronation=0)),
                 ArmMotion(IDLE),
             ),
         ),
