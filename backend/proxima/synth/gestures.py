@@ -23,7 +23,8 @@ views for forward), then checking the whole motion with a classifier trained on 
 clips only (`bench/synth_agreement.py`). `have_command` is raised higher than LASER's
 operator raises it (UAV-Gesture's people hold the fist near or above the head), and
 `move_ahead` beckons higher too: both read as their gesture far more often so
-(docs/synth.md).
+(docs/synth.md). Half of a data set's `have_command` clips take its variant, the fist
+raised ahead to just above the shoulder as LASER's operator does (`GestureSpec.variant`).
 """
 
 from __future__ import annotations
