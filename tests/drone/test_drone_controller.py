@@ -295,12 +295,17 @@ def test_a_lost_link_disarms_its_drone_only(
     assert move.status == "sent"
 
     a.cut()
+    # The watchdog disarms first, then ends the command and raises the alarm: wait for
+    # the alarm, its last step, before looking at the rest.
     deadline = time.monotonic() + 2.0
-    while ctl.gesture_control_armed("a") and time.monotonic() < deadline:
+    lost: list[DroneAlarmEvent] = []
+    while not lost and time.monotonic() < deadline:
         time.sleep(0.01)
+        lost += [e for e in alarms.drain() if isinstance(e, DroneAlarmEvent)]
     assert not ctl.gesture_control_armed("a") and ctl.gesture_control_armed("b")
     assert outcome(log, move.log_id) == "link_lost"
-    lost = [e for e in alarms.drain() if isinstance(e, DroneAlarmEvent)]
+    time.sleep(0.2)  # four more watchdog ticks: no second alarm
+    lost += [e for e in alarms.drain() if isinstance(e, DroneAlarmEvent)]
     assert [(e.drone, e.kind) for e in lost] == [("a", "link_lost")]
     assert "have_command again" in lost[0].message
 
