@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from proxima.gesture.geometry import torso_length
 from proxima.synth.anthropometry import nominal_body, sample_body
 from proxima.synth.body import body_landmarks
 from proxima.synth.gestures import SPECS
@@ -82,9 +83,7 @@ def test_have_command_has_a_lower_forward_variant() -> None:
         draw = draw_gesture("have_command", rng, variant=variant)
         assert draw.variant is variant
         lm = body_landmarks(body, perform([draw], rng).posture)
-        shoulder = lm[:, 12]
-        torso = np.linalg.norm((lm[0, 11] + lm[0, 12]) / 2 - (lm[0, 23] + lm[0, 24]) / 2)
-        rel = (lm[:, 16] - shoulder) / torso  # (forward, left, up) in torso lengths
+        rel = (lm[:, 16] - lm[:, 12]) / torso_length(lm).item()  # (fwd, left, up) in torsos
         return rel[np.argmax(rel[:, 2])]
 
     written, variant = top_of_wrist(False), top_of_wrist(True)
