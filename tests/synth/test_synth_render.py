@@ -8,16 +8,19 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from proxima.cli import app
 from proxima.gesture.laser import load_laser_csv
+from proxima.gesture.skeleton import MIRROR
 from proxima.pose import PoseEstimator
 from proxima.synth.anthropometry import nominal_body
 from proxima.synth.body import Placement, Stance, world_landmarks
 from proxima.synth.dataset import load_synth_dir
 from proxima.synth.motion import IDLE_LABEL, draw_gesture, perform
-from proxima.synth.projection import project_landmarks
+from proxima.synth.pose_model import match_sides
+from proxima.synth.projection import ImageLandmarks, project_landmarks
 from proxima.synth.render import Renderer, hit_capsule, hit_ellipsoid, sample_look
 from proxima.synth.views import orbit_camera
 
@@ -72,10 +75,10 @@ def test_synth_seen_by_mediapipe_writes_clips_the_loader_reads(tmp_path: Path) -
                 "--views", "left:-80..-70:5..10"]  # fmt: skip
 
     out = tmp_path / "rendered"
-    result = CliRunner().invoke(app, args(out, "mediapipe"))
+    result = CliRunner().invoke(app, [*args(out, "mediapipe"), "--sides", "exact"])
     assert result.exit_code == 0, result.output
     manifest = json.loads((out / "manifest.json").read_text())
-    assert manifest["seen_by"] == "mediapipe:pose_landmarker_full.task@480px"
+    assert manifest["seen_by"] == "mediapipe:pose_landmarker_full.task@480px,sides=exact"
     assert [e["frames"] for e in manifest["clip_list"]] == [12, 12]
     clips = load_synth_dir(out)
     assert [c.gesture for c in clips] == ["all_clear", "have_command"]
@@ -92,3 +95,33 @@ def test_synth_seen_by_mediapipe_writes_clips_the_loader_reads(tmp_path: Path) -
     assert len(common) > 0 and 0 < np.median(np.abs(a - b)) < 0.05
     bad = CliRunner().invoke(app, ["synth", "--out", str(tmp_path / "x"), "--seen-by", "eyes"])
     assert bad.exit_code == 2 and "expected 'geometry' or 'mediapipe'" in bad.output
+    bad = CliRunner().invoke(
+        app, ["synth", "--out", str(tmp_path / "y"), "--seen-by", "mediapipe", "--sides", "l"]
+    )
+    assert bad.exit_code == 2 and "expected 'exact' or 'mediapipe'" in bad.output
+
+
+def test_match_sides_relabels_the_frames_read_as_facing_away(laser_dir: Path) -> None:
+    rng = np.random.default_rng(0)
+
+    def landmarks(xyz: np.ndarray, vis: np.ndarray) -> ImageLandmarks:
+        return ImageLandmarks(xyz, vis, np.ones(len(xyz), bool), 1920, 1080)
+
+    for name, view in (("DJI_0164_move_to_left_f", "f"), ("DJI_0166_move_to_left_l", "l")):
+        clip = load_laser_csv(laser_dir / f"{name}.MP4.csv")
+        xyz, vis = clip.xyz[:90], clip.visibility[:90]
+        # The exact projection stands in as the real pose plus pose-model jitter.
+        exact = landmarks(xyz + rng.normal(0, 0.005, xyz.shape), vis)
+        _, swapped = match_sides(landmarks(xyz, vis), exact)
+        assert not swapped.any(), f"{view}: {swapped.sum()} frames swapped that were not"
+        seen_xyz = xyz.copy()
+        seen_xyz[30:50] = xyz[30:50][:, MIRROR]  # read as facing away
+        fixed, swapped = match_sides(landmarks(seen_xyz, vis), exact)
+        if view == "f":  # left and right lie apart: every swapped frame found, no other
+            assert np.flatnonzero(swapped).tolist() == list(range(30, 50))
+            assert np.array_equal(fixed.xyz, xyz)
+        else:  # a side view: both arms project close, so only clear swaps are undone
+            assert not swapped[:30].any() and not swapped[50:].any()
+            assert np.array_equal(fixed.xyz[swapped], xyz[swapped])
+    with pytest.raises(ValueError, match="differ in shape"):
+        match_sides(landmarks(xyz, vis), landmarks(xyz[:10], vis[:10]))

@@ -48,6 +48,14 @@ def synth(
     max_frames: Annotated[
         int | None, typer.Option(help="Keep each clip's first N frames (default: all).")
     ] = None,
+    sides: Annotated[
+        str,
+        typer.Option(
+            help="For --seen-by mediapipe: 'mediapipe' keeps its labelling; 'exact' "
+            "relabels the frames it reads as facing away (left and right swapped) by the "
+            "exact projection.",
+        ),
+    ] = "mediapipe",
 ) -> None:
     """Make synthetic operators perform the 13 gestures before virtual cameras; write each
     clip as a LASER-format CSV, plus manifest.json (body, camera and gesture parameters).
@@ -79,7 +87,7 @@ def synth(
         if seen_by == "mediapipe":
             from proxima.synth.pose_model import PoseModelSeer
 
-            seer = PoseModelSeer(pose_model, render_width, max_frames, fps)
+            seer = PoseModelSeer(pose_model, render_width, max_frames, fps, sides)
         elif seen_by == "geometry":
             seer = GeometricSeer(max_frames)
         else:
@@ -125,6 +133,9 @@ def synth(
         f"{out} in {seconds:.1f} s ({1000 * seconds / max(clips, 1):.0f} ms a clip); "
         f"train on them with --data synth:{out}"
     )
+    swapped = getattr(seer, "swapped_frames", 0)
+    if swapped:
+        typer.echo(f"MediaPipe read the operator as facing away in {swapped} frames: relabelled")
 
 
 def register(app: typer.Typer) -> None:
