@@ -7,9 +7,9 @@ hides, its jitter, its misses and its visibility scores, each a function of the 
 and the view. It costs about 40 ms a frame here (20 ms rendering, 20 ms MediaPipe), so a
 clip can be cut to its first `max_frames` frames.
 
-MediaPipe reads the mannequin as facing away from the camera in about a fifth of the
-front-view frames (every left landmark on the right and back; measured against the
-exact projection, `python -m bench.synth_sides`), which real people's clips almost never
+MediaPipe reads the mannequin as facing away from the camera in 11-22 % of front-view
+frames (every left landmark on the right and back; measured against the exact
+projection, `python -m bench.synth_sides`), which real people's clips almost never
 show (LASER's front view: 0.03 % of frames); such a `move_to_left` frame shows
 `move_to_right`. `match_sides` relabels them by the exact projection (`sides="exact"`): a
 frame is swapped back when the mirrored labelling lies clearly closer to the truth. Not
