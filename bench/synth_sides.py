@@ -35,6 +35,7 @@ from proxima.synth.pose_model import PoseModelSeer, match_sides
 from proxima.synth.projection import ImageLandmarks, project_landmarks
 
 RESULTS = Path(__file__).resolve().parent / "results"
+REVERSED = ("shoulders_reversed", "shoulders_reversed_after", "shoulders_reversed_exact")
 
 
 def shoulders_reversed(xyz: np.ndarray) -> np.ndarray:
@@ -92,23 +93,21 @@ def real_shoulders() -> dict[str, dict[str, float]]:
 
 def summarise(clips: list[dict[str, Any]]) -> dict[str, Any]:
     frames = sum(c["frames"] for c in clips)
-    share = [c["swapped"] / max(c["frames"], 1) for c in clips]
+
+    def share(key: str) -> float:
+        return round(sum(c[key] for c in clips) / max(frames, 1), 4)
+
+    def median(key: str) -> float:
+        return round(float(np.nanmedian([c[key] for c in clips])), 4)
+
     return {
         "clips": len(clips),
         "frames": frames,
-        "swapped": round(sum(c["swapped"] for c in clips) / max(frames, 1), 4),
-        "clips_over_10_percent": int(sum(s > 0.1 for s in share)),
-        "shoulders_reversed": round(sum(c["shoulders_reversed"] for c in clips) / frames, 4),
-        "shoulders_reversed_after": round(
-            sum(c["shoulders_reversed_after"] for c in clips) / frames, 4
-        ),
-        "shoulders_reversed_exact": round(
-            sum(c["shoulders_reversed_exact"] for c in clips) / frames, 4
-        ),
-        "median_error": round(float(np.nanmedian([c["median_error"] for c in clips])), 4),
-        "median_error_after": round(
-            float(np.nanmedian([c["median_error_after"] for c in clips])), 4
-        ),
+        "swapped": share("swapped"),
+        "clips_over_10_percent": sum(c["swapped"] > 0.1 * max(c["frames"], 1) for c in clips),
+        **{k: share(k) for k in REVERSED},
+        "median_error": median("median_error"),
+        "median_error_after": median("median_error_after"),
     }
 
 

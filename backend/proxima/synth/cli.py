@@ -83,11 +83,12 @@ def synth(
     from proxima.synth.dataset import GeometricSeer, Seer
 
     seer: Seer
+    rendered = None  # the MediaPipe seer, whose relabelled frames are reported at the end
     try:
         if seen_by == "mediapipe":
             from proxima.synth.pose_model import PoseModelSeer
 
-            seer = PoseModelSeer(pose_model, render_width, max_frames, fps, sides)
+            seer = rendered = PoseModelSeer(pose_model, render_width, max_frames, fps, sides)
         elif seen_by == "geometry":
             seer = GeometricSeer(max_frames)
         else:
@@ -133,9 +134,11 @@ def synth(
         f"{out} in {seconds:.1f} s ({1000 * seconds / max(clips, 1):.0f} ms a clip); "
         f"train on them with --data synth:{out}"
     )
-    swapped = getattr(seer, "swapped_frames", 0)
-    if swapped:
-        typer.echo(f"MediaPipe read the operator as facing away in {swapped} frames: relabelled")
+    if rendered is not None and rendered.swapped_frames:
+        typer.echo(
+            f"MediaPipe read the operator as facing away in {rendered.swapped_frames} frames: "
+            "relabelled"
+        )
 
 
 def register(app: typer.Typer) -> None:
