@@ -139,3 +139,41 @@ def test_one_seed_trains_one_model(laser_dir, tmp_path) -> None:
     a, b, c = train("a.pt", 3), train("b.pt", 3), train("c.pt", 4)
     assert all(torch.equal(a[k], b[k]) for k in a)
     assert not all(torch.equal(a[k], c[k]) for k in a)
+
+
+@pytest.mark.slow
+def test_a_shorter_window_trains_and_is_scored_on_the_same_test_parts(
+    laser_dir, laser_clips, small_checkpoint, tmp_path
+) -> None:
+    out = tmp_path / "w30.pt"
+    result = CliRunner().invoke(
+        app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
+              "--epochs", "1", "--stride", "16", "--threads", "1", "--window", "30"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    clf = GestureClassifier.load(out)
+    assert clf.window == 30 and clf.metadata["train_config"]["window"] == 30
+    w = make_windows([laser_clips[0]], window=30, stride=50)
+    assert clf.predict(w.xyz).shape == (len(w), 13)
+    with pytest.raises(ValueError, match=r"expected windows \(N, 30, 33, 3\)"):
+        clf.predict(make_windows([laser_clips[0]], stride=100).xyz)
+    # the split keeps its 60-frame gaps: both models are scored on the same test parts
+    scores = {}
+    for name, ckpt in (("w30", out), ("w60", small_checkpoint)):
+        result = CliRunner().invoke(
+            app, ["evaluate", "--checkpoint", str(ckpt), "--data", str(laser_dir),
+                  "--split", "temporal", "--json", str(tmp_path / f"{name}.json")],
+        )  # fmt: skip
+        assert result.exit_code == 0, result.output
+        scores[name] = json.loads((tmp_path / f"{name}.json").read_text())
+    assert scores["w30"]["clips"] == scores["w60"]["clips"]
+    assert scores["w30"]["windows"] > scores["w60"]["windows"]  # 30 more starts per part
+    # a window outside 15..60 frames, or a start of another window, is refused by name
+    for args, message in ((["--window", "10"], "window 10 frames: must lie between 15 and 60"),
+                          (["--window", "30", "--init", str(small_checkpoint)],
+                           "has 60-frame windows, not 30")):  # fmt: skip
+        result = CliRunner().invoke(
+            app, ["train", "--data", str(laser_dir), "--split", "temporal", "--epochs", "1",
+                  "--out", str(tmp_path / "x.pt"), "--threads", "1", *args],
+        )  # fmt: skip
+        assert result.exit_code == 2 and message in result.output, result.output

@@ -15,7 +15,7 @@ from proxima.gesture.clip import Clip
 from proxima.gesture.datasets import load_data
 from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
 from proxima.gesture.train import features, predict_proba
-from proxima.gesture.windows import Windows, make_windows, split_clips
+from proxima.gesture.windows import WINDOW, Windows, make_windows, split_clips
 from proxima.types import GESTURES
 
 
@@ -106,7 +106,7 @@ def evaluate_checkpoint(
     """
     clf = load_checkpoint(checkpoint)
     data = load_data(data_specs)
-    parts = split_clips(data.clips, split, clf.window, data.uav_dir)
+    parts = split_clips(data.clips, split, WINDOW, data.uav_dir)  # the protocol's gaps
     test = parts.test if parts.test else parts.train
     w = make_windows(test, clf.window, stride, max_gap)
     result = score_windows(clf, w, test)

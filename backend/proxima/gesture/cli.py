@@ -45,6 +45,9 @@ def train(
     epochs: int = 60,
     patience: int = 15,
     stride: Annotated[int, typer.Option(help="Frames between training windows.")] = 4,
+    window: Annotated[
+        int, typer.Option(help="Frames a window holds, 15-60; the engine reads it from the model.")
+    ] = 60,
     max_gap: Annotated[
         int, typer.Option(help="Longest gap (missing frames) a window may span.")
     ] = 5,
@@ -103,8 +106,8 @@ def train(
     from proxima.gesture.train import EpochLog, TrainConfig
     from proxima.gesture.workflow import train_model
 
-    cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, max_gap=max_gap,
-                      seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
+    cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, window=window,
+                      max_gap=max_gap, seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
                       transitions=transitions, refit=refit, augment=augment)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp

@@ -26,7 +26,7 @@ from proxima.gesture.augment import mirror, rotate, time_warp, transitions
 from proxima.gesture.features import Pipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.robust import AUGMENTS, CAPTURE_MIX, CaptureSource, capture_windows
-from proxima.gesture.windows import Windows
+from proxima.gesture.windows import MIN_WINDOW, WINDOW, Windows
 
 MIN_DELTA = 1e-4  # the least fall in validation loss that counts as better
 
@@ -44,6 +44,9 @@ class TrainConfig:
     seed: int = 0
     stride: int = 4
     max_gap: int = 5
+    # Frames a window holds (the engine reads it from the checkpoint). Splits keep their
+    # 60-frame gaps whatever the window, so every length is scored on the same test parts.
+    window: int = WINDOW
     rotate_deg: float = 15.0  # the paper's augmentation
     yaw_deg: float = 30.0  # extra yaw for windows with depth
     time_warp: float = 0.2  # +- change of speed (0.8x to 1.2x); 0 = off
@@ -87,9 +90,15 @@ def features(pipeline: Pipeline, w: Windows) -> np.ndarray:
 
 
 def check_augment(cfg: TrainConfig) -> None:
-    """Raises ValueError for an unknown `cfg.augment`."""
+    """Raises ValueError for an unknown `cfg.augment` or a window outside
+    MIN_WINDOW..WINDOW frames."""
     if cfg.augment not in AUGMENTS:
         raise ValueError(f"augment {cfg.augment!r}: choose from {', '.join(AUGMENTS)}")
+    if not MIN_WINDOW <= cfg.window <= WINDOW:
+        raise ValueError(
+            f"window {cfg.window} frames: must lie between {MIN_WINDOW} and {WINDOW} "
+            f"(the splits' gaps are {WINDOW} frames)"
+        )
 
 
 def validation_features(

@@ -19,6 +19,7 @@ from proxima.gesture.clip import Clip, DataError
 from proxima.types import GESTURES
 
 WINDOW = 60
+MIN_WINDOW = 15  # the shortest window `proxima train --window` takes (0.5 s at 30 fps)
 TEMPORAL_TRAIN_FRACTION = 0.7
 # Sources that only ever train: synthetic clips are not recordings of anyone, so no
 # split scores on them; every test part holds real clips only.

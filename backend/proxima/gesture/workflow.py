@@ -66,7 +66,7 @@ def fit_and_validation_windows(
 
 
 def calibration_fit_parts(
-    parts: SplitParts, stride: int, max_gap: int, share: float
+    parts: SplitParts, stride: int, max_gap: int, share: float, window: int = WINDOW
 ) -> tuple[list[Clip], list[Clip], int]:
     """(fit parts, validation parts, repeats) of a `calibrate:` split: the inner split's
     training part splits into fit and validation tails as always; the calibration parts
@@ -82,16 +82,18 @@ def calibration_fit_parts(
         raise DataError(f"calibration share {share:g}: must lie between 0 and 1 (exclusive)")
     calib_ids = {id(c) for c in parts.calibration}
     inner = [c for c in parts.train if id(c) not in calib_ids]
-    fit_parts, val_parts = validation_parts(inner, WINDOW)
-    n_inner = len(make_windows(fit_parts, WINDOW, stride, max_gap))
-    n_calib = len(make_windows(parts.calibration, WINDOW, stride, max_gap))
+    fit_parts, val_parts = validation_parts(inner, window)
+    n_inner = len(make_windows(fit_parts, window, stride, max_gap))
+    n_calib = len(make_windows(parts.calibration, window, stride, max_gap))
     repeats = 1
     if n_calib:
         repeats = max(1, round(share * n_inner / ((1 - share) * n_calib)))
     return list(fit_parts) + list(parts.calibration) * repeats, list(val_parts), repeats
 
 
-def load_init(path: str | Path, split: str, model_name: str) -> GestureClassifier:
+def load_init(
+    path: str | Path, split: str, model_name: str, window: int = WINDOW
+) -> GestureClassifier:
     """The checkpoint a calibration fine-tunes: it must have trained on the calibration
     split's inner split, so it has never seen the held-out clips (the shipped model,
     trained on every clip, has).
@@ -111,6 +113,8 @@ def load_init(path: str | Path, split: str, model_name: str) -> GestureClassifie
         )
     if clf.model_name != model_name:
         raise DataError(f"--init {path}: a {clf.model_name} model, not {model_name}")
+    if clf.window != window:
+        raise DataError(f"--init {path}: {clf.window}-frame windows, not {window}")
     return clf
 
 
@@ -146,21 +150,24 @@ def train_model(
     t0 = time.perf_counter()
     check_augment(cfg)
     calibrating = init is not None and parse_calibration(split) is not None
-    start = start_checkpoint(init, model_name, pipeline_name) if init and not calibrating else None
+    win = cfg.window
+    start = None
+    if init is not None and not calibrating:
+        start = start_checkpoint(init, model_name, pipeline_name, win)
     data = load_data(data_specs)
-    init_clf = load_init(init, split, model_name) if init is not None and calibrating else None
-    parts = split_clips(data.clips, split, WINDOW, data.uav_dir)
+    init_clf = load_init(init, split, model_name, win) if init is not None and calibrating else None
+    parts = split_clips(data.clips, split, WINDOW, data.uav_dir)  # the protocol's gaps
     train = parts.train
     repeats = 0
     if parts.calibration:
         fit_parts, val_parts, repeats = calibration_fit_parts(
-            parts, cfg.stride, cfg.max_gap, cfg.calibration_share
+            parts, cfg.stride, cfg.max_gap, cfg.calibration_share, win
         )
     else:
-        fit_parts, val_parts = validation_parts(train, WINDOW)
+        fit_parts, val_parts = validation_parts(train, win)
     names: list[str] = []
-    fit_w = make_windows(fit_parts, WINDOW, cfg.stride, cfg.max_gap, names)
-    val_w = make_windows(val_parts, WINDOW, cfg.stride, cfg.max_gap, names)
+    fit_w = make_windows(fit_parts, win, cfg.stride, cfg.max_gap, names)
+    val_w = make_windows(val_parts, win, cfg.stride, cfg.max_gap, names)
     # the refit's whole training part, with the calibration's weight as in fit
     whole_parts = list(train) + list(parts.calibration) * max(repeats - 1, 0)
     sources: dict[str, CaptureSource | None] = {"fit": None, "val": None, "whole": None}
@@ -168,7 +175,7 @@ def train_model(
         rows = history_rows(cfg.capture_mix)
         for key, ps in (("fit", fit_parts), ("val", val_parts), ("whole", whole_parts)):
             if key != "whole" or cfg.refit:
-                sources[key] = CaptureSource.from_parts(ps, WINDOW, cfg.stride, cfg.max_gap, rows)
+                sources[key] = CaptureSource.from_parts(ps, win, cfg.stride, cfg.max_gap, rows)
     if on_start:
         on_start(len(fit_w), len(val_w), fit_w.skipped + val_w.skipped)
     if start is not None:
@@ -199,7 +206,7 @@ def train_model(
     refit_windows = 0
     if cfg.refit and len(val_w) and init_clf is None:
         # the whole training part: fit, the gaps before the validation tails, the tails
-        whole = make_windows(whole_parts, WINDOW, cfg.stride, cfg.max_gap)
+        whole = make_windows(whole_parts, win, cfg.stride, cfg.max_gap)
         lrs = chosen_schedule(history, cfg.lr)
         if on_refit:
             on_refit(len(whole), len(lrs))
@@ -228,13 +235,13 @@ def train_model(
         "init": str(init) if init is not None else None,
     }
     temperature = calib.temperature if calib else 1.0
-    path = save_checkpoint(out, model, model_name, pipeline, WINDOW, meta, temperature)
+    path = save_checkpoint(out, model, model_name, pipeline, win, meta, temperature)
     return TrainResult(path, history, len(fit_w), len(val_w), fit_w.skipped + val_w.skipped,
                        time.perf_counter() - t0, refit_history)  # fmt: skip
 
 
 def start_checkpoint(
-    path: str | Path, model_name: str, pipeline_name: str | None
+    path: str | Path, model_name: str, pipeline_name: str | None, window: int = WINDOW
 ) -> GestureClassifier:
     """The checkpoint a run starts from (`--init`, and federated runs' `init`), checked to
     be the same model, pipeline and window.
@@ -249,6 +256,6 @@ def start_checkpoint(
             f"{path}: --init is a {start.model_name} model with the {start.pipeline.name!r} "
             f"pipeline, but this run trains {model_name} with {wanted!r}"
         )
-    if start.window != WINDOW:
-        raise ValueError(f"{path}: --init has {start.window}-frame windows, not {WINDOW}")
+    if start.window != window:
+        raise ValueError(f"{path}: --init has {start.window}-frame windows, not {window}")
     return start
