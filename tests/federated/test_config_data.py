@@ -141,3 +141,12 @@ def test_init_starts_the_global_model_from_a_checkpoint(tmp_path) -> None:
         start_model(fast_config(init=str(tmp_path / "missing.pt")))
     with pytest.raises(ConfigError, match=r"'init': .* a tcn model .* this run trains paper-lstm"):
         start_model(fast_config(init=str(shipped), model="paper-lstm"))
+
+
+def test_the_window_key_sets_the_drones_window_length(laser_clips) -> None:
+    with pytest.raises(ConfigError, match="'window'"):
+        FLConfig.from_run_config({"window": 10})  # under 15 frames
+    cfg = FLConfig.from_run_config({"window": 30, "stride": 24})
+    fit_w, val_w = partition_windows(cfg, 0, laser_clips)
+    assert fit_w.xyz.shape[1] == val_w.xyz.shape[1] == 30
+    assert partition_windows(fast_config(stride=24), 0, laser_clips)[0].xyz.shape[1] == 60

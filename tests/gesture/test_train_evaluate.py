@@ -12,6 +12,7 @@ from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.features import PaperPipeline
 from proxima.gesture.geometry import to_metric
 from proxima.gesture.models import build_model
+from proxima.gesture.take_calibration import calibrate_takes, split_take
 from proxima.gesture.train import EpochLog, TrainConfig, chosen_schedule, fit, fit_schedule
 from proxima.gesture.windows import make_windows, split_clips
 from proxima.types import GESTURES
@@ -168,6 +169,13 @@ def test_a_shorter_window_trains_and_is_scored_on_the_same_test_parts(
         scores[name] = json.loads((tmp_path / f"{name}.json").read_text())
     assert scores["w30"]["clips"] == scores["w60"]["clips"]
     assert scores["w30"]["windows"] > scores["w60"]["windows"]  # 30 more starts per part
+    # the console's calibration fine-tunes it on its own window length
+    takes = [next(c for c in laser_clips if c.gesture == g and c.view == "r").slice(20, 230)
+             for g in GESTURES[:3]]  # fmt: skip
+    res = calibrate_takes(out, takes, tmp_path / "cal.pt", epochs=1, threads=1)
+    tuned = GestureClassifier.load(res.checkpoint)
+    assert tuned.window == 30 and tuned.metadata["train_config"]["window"] == 30
+    assert res.train_windows == len(make_windows([split_take(t)[0] for t in takes], 30, 3))
     # a window outside 15..60 frames, or a start of another window, is refused by name
     for args, message in ((["--window", "10"], "window 10 frames: must lie between 15 and 60"),
                           (["--window", "30", "--init", str(small_checkpoint)],

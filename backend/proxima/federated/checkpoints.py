@@ -20,7 +20,6 @@ from proxima.federated.config import FLConfig
 from proxima.federated.recorder import kept_round_row
 from proxima.federated.task import new_model, set_weights
 from proxima.gesture.classifier import save_checkpoint
-from proxima.gesture.windows import WINDOW
 
 
 def checkpoint_path(models_dir: str | Path, run_id: str) -> Path:
@@ -65,7 +64,7 @@ def save_run_model(
         "test_accuracy": final.get("global_accuracy"),
     }
     path = save_checkpoint(
-        checkpoint_path(cfg.models_dir, cfg.run_id), model, cfg.model, pipeline, WINDOW, meta
+        checkpoint_path(cfg.models_dir, cfg.run_id), model, cfg.model, pipeline, cfg.window, meta
     )
     card = path.with_suffix(".md")
     card.write_text(model_card(cfg, rounds, path, extra or {}, final))

@@ -20,6 +20,8 @@ from typing import Annotated, Any, Literal, get_args, get_origin, get_type_hints
 
 from pydantic import ConfigDict, Field, TypeAdapter, ValidationError
 
+from proxima.gesture.windows import MIN_WINDOW, WINDOW
+
 Strategy = Literal["fedavg", "fedprox", "fedadam", "fedavgm", "scaffold"]
 Partition = Literal["view", "iid", "dirichlet"]
 STRATEGIES: tuple[str, ...] = get_args(Strategy)
@@ -75,6 +77,9 @@ class FLConfig:
     model: str = "tcn"
     pipeline: str = "body"
     stride: AtLeastOne = 4  # frames between training windows (as centralised training)
+    # frames a window holds (`proxima train --window`): the streams' models' length, or
+    # promotion refuses the run's model
+    window: Annotated[int, Field(ge=MIN_WINDOW, le=WINDOW)] = WINDOW
     test_stride: AtLeastOne = 3  # frames between held-out test windows
     max_gap: Annotated[int, Field(ge=0)] = 5
     patience: AtLeastOne = 12  # local early stopping (epochs without a better val loss)

@@ -125,8 +125,8 @@ def load_clips(specs: Sequence[str] | None) -> list[Clip]:
 def test_windows(cfg: FLConfig, clips: Sequence[Clip] | None = None) -> Windows:
     """The held-out set: the last 30% of every clip (the temporal split's test part)."""
     clips = load_clips(cfg.data_specs()) if clips is None else clips
-    parts = split_clips(clips, "temporal", WINDOW)
-    return make_windows(parts.test, WINDOW, cfg.test_stride, cfg.max_gap)
+    parts = split_clips(clips, "temporal", WINDOW)  # the protocol's gaps
+    return make_windows(parts.test, cfg.window, cfg.test_stride, cfg.max_gap)
 
 
 def _assign(labels: np.ndarray, cfg: FLConfig, salt: int) -> np.ndarray:
@@ -154,22 +154,24 @@ def partition_windows(
     cfg: FLConfig, partition_id: int, clips: Sequence[Clip]
 ) -> tuple[Windows, Windows]:
     """(fit, validation) windows of one drone's partition of the training parts."""
-    parts = split_clips(clips, "temporal", WINDOW)
+    parts = split_clips(clips, "temporal", WINDOW)  # the protocol's gaps
     train = parts.train
     if cfg.partition == "view":
         view = view_of(partition_id)
         train = [c for c in train if c.view == view]
-    fit_parts, val_parts = validation_parts(train, WINDOW)
+    fit_parts, val_parts = validation_parts(train, cfg.window)
     names: list[str] = []
-    fit = make_windows(fit_parts, WINDOW, cfg.stride, cfg.max_gap, names)
-    val = make_windows(val_parts, WINDOW, cfg.stride, cfg.max_gap, names)
+    fit = make_windows(fit_parts, cfg.window, cfg.stride, cfg.max_gap, names)
+    val = make_windows(val_parts, cfg.window, cfg.stride, cfg.max_gap, names)
     if cfg.partition != "view":
         fit = fit.subset(np.flatnonzero(_assign(fit.labels, cfg, 1) == partition_id))
         val = val.subset(np.flatnonzero(_assign(val.labels, cfg, 2) == partition_id))
     return fit, val
 
 
-def sample_clips(db_path: str | Path, drone: str) -> tuple[list[Clip], list[str]]:
+def sample_clips(
+    db_path: str | Path, drone: str, window: int = WINDOW
+) -> tuple[list[Clip], list[str]]:
     """The drone's kept samples from the console's store as clips, plus one note per
     sample that had to be skipped (the run goes on without it)."""
     from sqlalchemy import inspect
@@ -196,8 +198,8 @@ def sample_clips(db_path: str | Path, drone: str) -> tuple[list[Clip], list[str]
                         raise ValueError("non-finite landmarks")
                     if row.label not in GESTURES:
                         raise ValueError(f"unknown label {row.label!r}")
-                    if len(xyz) < WINDOW:
-                        raise ValueError(f"{len(xyz)} frames, fewer than one window ({WINDOW})")
+                    if len(xyz) < window:
+                        raise ValueError(f"{len(xyz)} frames, fewer than one window ({window})")
                 except ValueError as exc:
                     notes.append(f"sample {row.id} skipped: {exc}")
                     continue
@@ -252,11 +254,11 @@ def drone_data(
         if not Path(samples_db).is_file():
             out.notes.append(f"sample store {samples_db} not found: no samples used")
         else:
-            extra, notes = sample_clips(samples_db, drone)
+            extra, notes = sample_clips(samples_db, drone, cfg.window)
             out.notes += notes
             if extra:
                 # Samples are short: all of each trains (validation stays the data set's).
-                out.fit = _concat(fit, make_windows(extra, WINDOW, cfg.stride, cfg.max_gap))
+                out.fit = _concat(fit, make_windows(extra, cfg.window, cfg.stride, cfg.max_gap))
                 out.samples_used = len(extra)
                 out.notes.append(f"{len(extra)} console sample(s) used")
     return out

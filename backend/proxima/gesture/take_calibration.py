@@ -120,12 +120,14 @@ def calibrate_takes(
         held_parts.append(b)
     clf = GestureClassifier.load(checkpoint)
     before = score(clf, held_parts)
-    cfg = TrainConfig(epochs=epochs, seed=seed, threads=threads, stride=TRAIN_STRIDE)
-    fit_w = make_windows(train_parts, WINDOW, cfg.stride, cfg.max_gap)
+    cfg = TrainConfig(
+        epochs=epochs, seed=seed, threads=threads, stride=TRAIN_STRIDE, window=clf.window
+    )  # the model's own window, as the engine cuts them
+    fit_w = make_windows(train_parts, cfg.window, cfg.stride, cfg.max_gap)
     if not len(fit_w):
         raise DataError("the takes' training parts hold no window (frames missing?)")
     source = CaptureSource.from_parts(
-        train_parts, WINDOW, cfg.stride, cfg.max_gap, history_rows(cfg.capture_mix)
+        train_parts, cfg.window, cfg.stride, cfg.max_gap, history_rows(cfg.capture_mix)
     )
     tune = replace(cfg, lr=cfg.lr * FINE_TUNE_LR)
 
