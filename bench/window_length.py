@@ -1,0 +1,165 @@
+"""Issue 21's latency lever: the window length. Held-out temporal-split models trained
+with `proxima train --window N` (seeds as given), each scored as `proxima evaluate`
+scores it and on the stitched held-out streams of `bench.robust_training streams`
+(12 evaluation streams, 6 tuning streams, 30 gestures each, clean and `field` level 1),
+with three decision rules: the evidence rule tuned on the tuning streams, the moving
+average at the model's fitted temperature, and the moving average at T = 1 (what the
+shipped checkpoint uses); headline figures per view as well.
+
+    proxima train --data laser --split temporal --epochs 60 --patience 15 --threads 1 \
+        --seed S --window N --out runs/window/wN-sS.pt          # about 4-6 min each
+    python -m bench.window_length --model 30=runs/window/w30-s0.pt,... \
+        --model 60=runs/window/w60-s0.pt,... --cache-dir runs/window \
+        --out bench/results/window_length.json
+
+The recognitions of each checkpoint are cached in --cache-dir (`recs-<stem>.pkl`, the
+same pickle `bench.robust_training streams --cache` writes), so a rerun only re-scores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pickle
+import shlex
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from bench.robust_untempered import untempered
+from proxima.control import ControlSettings
+from proxima.engine import load_classifier
+from proxima.engine.config import EngineSettings
+from proxima.evaluation.latency import evaluate_config
+from proxima.evaluation.metrics import evaluate_checkpoint
+from proxima.evaluation.robust_training import (
+    decision_streams,
+    recognitions,
+    summary_row,
+    tune_evidence,
+)
+from proxima.gesture.capture import condition
+from proxima.gesture.datasets import load_data
+
+EVIDENCE_KEYS = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
+HEADLINE = ("hit_rate", "on_time_rate", "latency_median_s", "latency_p95_s", "wrong", "repeats")
+VIEWS = "flr"  # decision_streams deals the views f, l, r in turn
+
+
+def log(msg: str) -> None:
+    print(f"[{time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
+
+
+def streams_and_recognitions(checkpoint: str, cache: Path, args: argparse.Namespace) -> tuple:
+    if cache.is_file():
+        log(f"recognitions from {cache}")
+        return pickle.loads(cache.read_bytes())
+    clips = load_data(["laser"]).clips
+    clf = load_classifier(checkpoint)
+    settings = EngineSettings()
+    tune_sets, eval_sets = {}, {}
+    for key, model in {"clean": condition("clean"), "field1": condition("field", 1)}.items():
+        s = decision_streams(clips, range(args.tune_streams), args.segments, model)
+        tune_sets[key] = (s, recognitions(s, clf, settings))
+        s = decision_streams(clips, range(1000, 1000 + args.streams), args.segments, model)
+        eval_sets[key] = (s, recognitions(s, clf, settings))
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    cache.write_bytes(pickle.dumps((tune_sets, eval_sets)))
+    return tune_sets, eval_sets
+
+
+def headline(streams: list, recs: list, control: ControlSettings) -> dict[str, Any]:
+    row = summary_row(evaluate_config(streams, recs, control))
+    return {k: row[k] for k in HEADLINE}
+
+
+def score_rule(eval_sets: dict, control: ControlSettings, temperature: float | None) -> dict:
+    """Headline figures per condition, overall and per view (`temperature`: undo it)."""
+    out: dict[str, Any] = {}
+    for key, (streams, recs) in eval_sets.items():
+        if temperature is not None:
+            recs = [untempered(r, temperature) for r in recs]
+        out[key] = headline(streams, recs, control)
+        out[key]["per_view"] = {
+            v: headline(streams[k :: len(VIEWS)], recs[k :: len(VIEWS)], control)
+            for k, v in enumerate(VIEWS)
+        }
+    return out
+
+
+def score_checkpoint(checkpoint: str, args: argparse.Namespace) -> dict[str, Any]:
+    clf = load_classifier(checkpoint)
+    temperature = float(getattr(clf, "temperature", 1.0))
+    windows = evaluate_checkpoint(checkpoint, ["laser"], "temporal")
+    cache = args.cache_dir / f"recs-{Path(checkpoint).stem}.pkl"
+    tune_sets, eval_sets = streams_and_recognitions(checkpoint, cache, args)
+    best, _ = tune_evidence(list(tune_sets.values()))
+    evidence = ControlSettings(decision="evidence", **{k: best[k] for k in EVIDENCE_KEYS})
+    return {
+        "checkpoint": checkpoint,
+        "window": clf.window,
+        "temperature": temperature,
+        "window_accuracy": windows["accuracy"],
+        "window_accuracy_per_view": {v: r["accuracy"] for v, r in windows["per_view"].items()},
+        "evidence_setting": {k: best[k] for k in EVIDENCE_KEYS},
+        "evidence": score_rule(eval_sets, evidence, None),
+        "average_fitted_T": score_rule(eval_sets, ControlSettings(), None),
+        "average_T1": score_rule(eval_sets, ControlSettings(), temperature),
+        "stream_hours": {
+            k: round(sum(x.duration_s for x in s) / 3600, 3) for k, (s, _) in eval_sets.items()
+        },
+    }
+
+
+def means(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per rule and condition, each headline figure's mean over the seeds."""
+    out: dict[str, Any] = {
+        "window_accuracy": round(np.mean([r["window_accuracy"] for r in rows]), 4)
+    }
+    for rule in ("evidence", "average_fitted_T", "average_T1"):
+        for cond in ("clean", "field1"):
+            vals = {k: [r[rule][cond][k] for r in rows if r[rule][cond][k] is not None]
+                    for k in HEADLINE}  # fmt: skip
+            out[f"{rule}/{cond}"] = {k: round(float(np.mean(v)), 3) for k, v in vals.items() if v}
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--model", action="append", required=True,
+                    help="LABEL=CKPT[,CKPT...]: the seeds of one window length")  # fmt: skip
+    ap.add_argument("--streams", type=int, default=12)
+    ap.add_argument("--tune-streams", type=int, default=6)
+    ap.add_argument("--segments", type=int, default=30)
+    ap.add_argument("--cache-dir", type=Path, default=Path("runs/window"))
+    ap.add_argument("--out", type=Path, default=Path("bench/results/window_length.json"))
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    t0 = time.perf_counter()
+    result: dict[str, Any] = {}
+    for spec in args.model:
+        label, _, paths = spec.partition("=")
+        rows = []
+        for path in paths.split(","):
+            log(f"{label}: {path}")
+            rows.append(score_checkpoint(path, args))
+        result[label] = {"seeds": rows, "mean": means(rows)}
+        log(f"{label}: {json.dumps(result[label]['mean'])}")
+    doc = {
+        "benchmark": "window_length",
+        "command": "python -m bench.window_length " + shlex.join(sys.argv[1:]),
+        "date": time.strftime("%Y-%m-%d"),
+        "result": result,
+        "seconds": round(time.perf_counter() - t0, 1),
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(doc, indent=1))
+    log(f"wrote {args.out} ({doc['seconds']} s)")
+
+
+if __name__ == "__main__":
+    main()
