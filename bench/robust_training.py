@@ -81,28 +81,48 @@ def windows_cmd(args: argparse.Namespace) -> dict:
     return out
 
 
-def streams_cmd(args: argparse.Namespace) -> dict:
-    clips = load_data(["laser"]).clips
-    clf = load_classifier(args.checkpoint)  # comma-joined: their ensemble
-    settings = EngineSettings()
-    conds = {"clean": condition("clean"), "field1": condition("field", 1)}
-    tune_sets, eval_sets = {}, {}
-    cache = args.cache
+def recognised_streams(checkpoint: str, args: argparse.Namespace, cache: Path | None) -> tuple:
+    """(tuning sets, evaluation sets): per condition (clean, `field` 1) the stitched
+    streams (`args.tune_streams` from seed 0, `args.streams` from seed 1000, of
+    `args.segments` gestures) and the checkpoint's recognitions of them, read from
+    `cache` when it exists and written there when it does not."""
     if cache is not None and cache.is_file():  # the same checkpoint and stream options
-        tune_sets, eval_sets = pickle.loads(cache.read_bytes())
         log(f"recognitions from {cache}")
-    for key, model in conds.items():
-        if key in eval_sets:
-            continue
+        return pickle.loads(cache.read_bytes())
+    clips = load_data(["laser"]).clips
+    clf = load_classifier(checkpoint)  # comma-joined: their ensemble
+    settings = EngineSettings()
+    tune_sets, eval_sets = {}, {}
+    for key, model in {"clean": condition("clean"), "field1": condition("field", 1)}.items():
         t0 = time.perf_counter()
         s = decision_streams(clips, range(args.tune_streams), args.segments, model)
         tune_sets[key] = (s, recognitions(s, clf, settings))
         s = decision_streams(clips, range(1000, 1000 + args.streams), args.segments, model)
         eval_sets[key] = (s, recognitions(s, clf, settings))
         log(f"{key}: streams recognised in {time.perf_counter() - t0:.0f} s")
-    if cache is not None and not cache.is_file():
+    if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         cache.write_bytes(pickle.dumps((tune_sets, eval_sets)))
+    return tune_sets, eval_sets
+
+
+def write_doc(out: Path, benchmark: str, module: str, result: dict, t0: float) -> None:
+    """The benchmark's JSON: its name, the command that made it, date, result, seconds."""
+    doc = {
+        "benchmark": benchmark,
+        "command": f"python -m bench.{module} " + shlex.join(sys.argv[1:]),
+        "date": time.strftime("%Y-%m-%d"),
+        "result": result,
+        "seconds": round(time.perf_counter() - t0, 1),
+    }
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(doc, indent=1))
+    log(f"wrote {out} ({doc['seconds']} s)")
+
+
+def streams_cmd(args: argparse.Namespace) -> dict:
+    clf = load_classifier(args.checkpoint)
+    tune_sets, eval_sets = recognised_streams(args.checkpoint, args, args.cache)
     best, rows = tune_evidence(list(tune_sets.values()))
     log(f"evidence rule selected: {best}")
     keys = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
@@ -163,16 +183,7 @@ def main() -> None:
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     result = windows_cmd(args) if args.cmd == "windows" else streams_cmd(args)
-    doc = {
-        "benchmark": f"robust_training {args.cmd}",
-        "command": "python -m bench.robust_training " + shlex.join(sys.argv[1:]),
-        "date": time.strftime("%Y-%m-%d"),
-        "result": result,
-        "seconds": round(time.perf_counter() - t0, 1),
-    }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(doc, indent=1))
-    log(f"wrote {args.out} ({doc['seconds']} s)")
+    write_doc(args.out, f"robust_training {args.cmd}", "robust_training", result, t0)
 
 
 if __name__ == "__main__":

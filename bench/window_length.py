@@ -22,9 +22,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import pickle
-import shlex
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -32,46 +29,24 @@ from typing import Any
 import numpy as np
 import torch
 
+from bench.robust_training import log, recognised_streams, write_doc
 from bench.robust_untempered import untempered
 from proxima.control import ControlSettings
 from proxima.engine import load_classifier
-from proxima.engine.config import EngineSettings
 from proxima.evaluation.latency import evaluate_config
 from proxima.evaluation.metrics import evaluate_checkpoint
 from proxima.evaluation.robust_training import (
-    decision_streams,
-    recognitions,
     summary_row,
     tune_evidence,
 )
-from proxima.gesture.capture import condition
-from proxima.gesture.datasets import load_data
 
 EVIDENCE_KEYS = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
 HEADLINE = ("hit_rate", "on_time_rate", "latency_median_s", "latency_p95_s", "wrong", "repeats")
 VIEWS = "flr"  # decision_streams deals the views f, l, r in turn
 
 
-def log(msg: str) -> None:
-    print(f"[{time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
-
-
-def streams_and_recognitions(checkpoint: str, cache: Path, args: argparse.Namespace) -> tuple:
-    if cache.is_file():
-        log(f"recognitions from {cache}")
-        return pickle.loads(cache.read_bytes())
-    clips = load_data(["laser"]).clips
-    clf = load_classifier(checkpoint)
-    settings = EngineSettings()
-    tune_sets, eval_sets = {}, {}
-    for key, model in {"clean": condition("clean"), "field1": condition("field", 1)}.items():
-        s = decision_streams(clips, range(args.tune_streams), args.segments, model)
-        tune_sets[key] = (s, recognitions(s, clf, settings))
-        s = decision_streams(clips, range(1000, 1000 + args.streams), args.segments, model)
-        eval_sets[key] = (s, recognitions(s, clf, settings))
-    cache.parent.mkdir(parents=True, exist_ok=True)
-    cache.write_bytes(pickle.dumps((tune_sets, eval_sets)))
-    return tune_sets, eval_sets
+def cache_path(checkpoint: str, args: argparse.Namespace) -> Path:
+    return args.cache_dir / f"recs-{Path(checkpoint).stem}.pkl"
 
 
 def headline(streams: list, recs: list, control: ControlSettings) -> dict[str, Any]:
@@ -96,10 +71,7 @@ def score_rule(eval_sets: dict, control: ControlSettings, temperature: float | N
 def shared_evidence(checkpoints: list[str], args: argparse.Namespace) -> dict[str, Any]:
     """One evidence setting for every seed (what a shipped default would be): the grid
     ranked on all seeds' tuning streams pooled, then each seed's evaluation streams."""
-    sets = [
-        streams_and_recognitions(c, args.cache_dir / f"recs-{Path(c).stem}.pkl", args)
-        for c in checkpoints
-    ]
+    sets = [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
     best, _ = tune_evidence([s for tune_sets, _ in sets for s in tune_sets.values()])
     control = ControlSettings(decision="evidence", **{k: best[k] for k in EVIDENCE_KEYS})
     per_seed = [score_rule(eval_sets, control, None) for _, eval_sets in sets]
@@ -117,8 +89,7 @@ def score_checkpoint(checkpoint: str, args: argparse.Namespace) -> dict[str, Any
     clf = load_classifier(checkpoint)
     temperature = float(getattr(clf, "temperature", 1.0))
     windows = evaluate_checkpoint(checkpoint, ["laser"], "temporal")
-    cache = args.cache_dir / f"recs-{Path(checkpoint).stem}.pkl"
-    tune_sets, eval_sets = streams_and_recognitions(checkpoint, cache, args)
+    tune_sets, eval_sets = recognised_streams(checkpoint, args, cache_path(checkpoint, args))
     best, _ = tune_evidence(list(tune_sets.values()))
     evidence = ControlSettings(decision="evidence", **{k: best[k] for k in EVIDENCE_KEYS})
     return {
@@ -173,16 +144,7 @@ def main() -> None:
         if len(rows) > 1:
             result[label]["evidence_shared"] = shared_evidence(paths.split(","), args)
         log(f"{label}: {json.dumps(result[label]['mean'])}")
-    doc = {
-        "benchmark": "window_length",
-        "command": "python -m bench.window_length " + shlex.join(sys.argv[1:]),
-        "date": time.strftime("%Y-%m-%d"),
-        "result": result,
-        "seconds": round(time.perf_counter() - t0, 1),
-    }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(doc, indent=1))
-    log(f"wrote {args.out} ({doc['seconds']} s)")
+    write_doc(args.out, "window_length", "window_length", result, t0)
 
 
 if __name__ == "__main__":
