@@ -89,7 +89,7 @@ def features(pipeline: Pipeline, w: Windows) -> np.ndarray:
     return pipeline.transform(to_metric(w.xyz, w.aspect), w.has_z)
 
 
-def check_augment(cfg: TrainConfig) -> None:
+def check_config(cfg: TrainConfig) -> None:
     """Raises ValueError for an unknown `cfg.augment` or a window outside
     MIN_WINDOW..WINDOW frames."""
     if cfg.augment not in AUGMENTS:
@@ -224,7 +224,7 @@ def _start(
     """What every run sets up first: (the seeded rng, the metric windows (None with
     capture augmentation: redrawn each epoch), the optimiser, the loss), with torch's
     threads and seeds set."""
-    check_augment(cfg)
+    check_config(cfg)
     torch.set_num_threads(cfg.threads)
     rng = seed_everything(cfg.seed)
     metric = None if cfg.augment == "capture" else to_metric(train.xyz, train.aspect)

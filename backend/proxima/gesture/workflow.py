@@ -21,7 +21,7 @@ from proxima.gesture.robust import CaptureSource, history_rows
 from proxima.gesture.train import (
     EpochLog,
     TrainConfig,
-    check_augment,
+    check_config,
     chosen_schedule,
     fit,
     fit_schedule,
@@ -148,7 +148,7 @@ def train_model(
         ValueError: `init` is another model or pipeline than this run's.
     """
     t0 = time.perf_counter()
-    check_augment(cfg)
+    check_config(cfg)
     calibrating = init is not None and parse_calibration(split) is not None
     win = cfg.window
     start = None
