@@ -68,28 +68,31 @@ def score_rule(eval_sets: dict, control: ControlSettings, temperature: float | N
     return out
 
 
-def shared_evidence(checkpoints: list[str], args: argparse.Namespace) -> dict[str, Any]:
+def mean_headline(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Each headline figure's mean over rows (None where a row has none)."""
+    return {
+        k: round(float(np.mean(v)), 3)
+        for k in HEADLINE
+        if (v := [r[k] for r in rows if r[k] is not None])
+    }
+
+
+def shared_evidence(sets: list[tuple]) -> dict[str, Any]:
     """One evidence setting for every seed (what a shipped default would be): the grid
     ranked on all seeds' tuning streams pooled, then each seed's evaluation streams."""
-    sets = [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
     best, _ = tune_evidence([s for tune_sets, _ in sets for s in tune_sets.values()])
     control = ControlSettings(decision="evidence", **{k: best[k] for k in EVIDENCE_KEYS})
     per_seed = [score_rule(eval_sets, control, None) for _, eval_sets in sets]
-    mean = {
-        cond: {
-            k: round(float(np.mean([p[cond][k] for p in per_seed if p[cond][k] is not None])), 3)
-            for k in HEADLINE
-        }
-        for cond in ("clean", "field1")
-    }
+    mean = {cond: mean_headline([p[cond] for p in per_seed]) for cond in ("clean", "field1")}
     return {"setting": {k: best[k] for k in EVIDENCE_KEYS}, "per_seed": per_seed, "mean": mean}
 
 
-def score_checkpoint(checkpoint: str, args: argparse.Namespace) -> dict[str, Any]:
+def score_checkpoint(checkpoint: str, sets: tuple) -> dict[str, Any]:
+    """Window accuracy, then the three rules on the checkpoint's recognised streams."""
     clf = load_classifier(checkpoint)
-    temperature = float(getattr(clf, "temperature", 1.0))
+    temperature = float(getattr(clf, "temperature", 1.0))  # an ensemble has none: T = 1
     windows = evaluate_checkpoint(checkpoint, ["laser"], "temporal")
-    tune_sets, eval_sets = recognised_streams(checkpoint, args, cache_path(checkpoint, args))
+    tune_sets, eval_sets = sets
     best, _ = tune_evidence(list(tune_sets.values()))
     evidence = ControlSettings(decision="evidence", **{k: best[k] for k in EVIDENCE_KEYS})
     return {
@@ -110,14 +113,11 @@ def score_checkpoint(checkpoint: str, args: argparse.Namespace) -> dict[str, Any
 
 def means(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Per rule and condition, each headline figure's mean over the seeds."""
-    out: dict[str, Any] = {
-        "window_accuracy": round(np.mean([r["window_accuracy"] for r in rows]), 4)
-    }
+    accuracy = float(np.mean([r["window_accuracy"] for r in rows]))
+    out: dict[str, Any] = {"window_accuracy": round(accuracy, 4)}
     for rule in ("evidence", "average_fitted_T", "average_T1"):
         for cond in ("clean", "field1"):
-            vals = {k: [r[rule][cond][k] for r in rows if r[rule][cond][k] is not None]
-                    for k in HEADLINE}  # fmt: skip
-            out[f"{rule}/{cond}"] = {k: round(float(np.mean(v)), 3) for k, v in vals.items() if v}
+            out[f"{rule}/{cond}"] = mean_headline([r[rule][cond] for r in rows])
     return out
 
 
@@ -136,13 +136,15 @@ def main() -> None:
     result: dict[str, Any] = {}
     for spec in args.model:
         label, _, paths = spec.partition("=")
+        checkpoints = paths.split(",")
+        sets = [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
         rows = []
-        for path in paths.split(","):
+        for path, recognised in zip(checkpoints, sets, strict=True):
             log(f"{label}: {path}")
-            rows.append(score_checkpoint(path, args))
+            rows.append(score_checkpoint(path, recognised))
         result[label] = {"seeds": rows, "mean": means(rows)}
         if len(rows) > 1:
-            result[label]["evidence_shared"] = shared_evidence(paths.split(","), args)
+            result[label]["evidence_shared"] = shared_evidence(sets)
         log(f"{label}: {json.dumps(result[label]['mean'])}")
     write_doc(args.out, "window_length", "window_length", result, t0)
 

@@ -1,11 +1,12 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
-from typer.testing import CliRunner
+from typer.testing import CliRunner, Result
 
 from proxima.cli import app
 from proxima.gesture.classifier import GestureClassifier
@@ -16,6 +17,14 @@ from proxima.gesture.take_calibration import calibrate_takes, split_take
 from proxima.gesture.train import EpochLog, TrainConfig, chosen_schedule, fit, fit_schedule
 from proxima.gesture.windows import make_windows, split_clips
 from proxima.types import GESTURES
+
+
+def _train(laser_dir: Path, out: Path, *args: str) -> Result:
+    """`proxima train` on the temporal split with one thread, as the tests here run it."""
+    return CliRunner().invoke(
+        app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
+              "--threads", "1", *args],
+    )  # fmt: skip
 
 
 def test_checkpoint_is_one_self_contained_small_file(small_checkpoint, laser_clips) -> None:
@@ -94,10 +103,7 @@ def test_train_with_refit_saves_the_model_trained_on_the_whole_training_part(
     laser_dir, tmp_path
 ) -> None:
     out = tmp_path / "refit.pt"
-    result = CliRunner().invoke(
-        app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
-              "--epochs", "3", "--stride", "12", "--threads", "1", "--refit"],
-    )  # fmt: skip
+    result = _train(laser_dir, out, "--epochs", "3", "--stride", "12", "--refit")
     assert result.exit_code == 0, result.output
     assert "refit: a fresh model on the whole training part" in result.output
     meta = GestureClassifier.load(out).metadata
@@ -110,10 +116,7 @@ def test_train_with_refit_saves_the_model_trained_on_the_whole_training_part(
 @pytest.mark.slow
 def test_train_and_evaluate_with_the_body_image_pipeline(laser_dir, tmp_path) -> None:
     out = tmp_path / "image.pt"
-    result = CliRunner().invoke(
-        app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
-              "--epochs", "2", "--stride", "12", "--threads", "1", "--pipeline", "body-image"],
-    )  # fmt: skip
+    result = _train(laser_dir, out, "--epochs", "2", "--stride", "12", "--pipeline", "body-image")
     assert result.exit_code == 0, result.output
     assert GestureClassifier.load(out).pipeline.name == "body-image"
     result = CliRunner().invoke(
@@ -130,10 +133,7 @@ def test_one_seed_trains_one_model(laser_dir, tmp_path) -> None:
     # content, a third with another seed does not.
     def train(name: str, seed: int) -> dict:
         out = tmp_path / name
-        result = CliRunner().invoke(
-            app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
-                  "--epochs", "1", "--stride", "16", "--threads", "1", "--seed", str(seed)],
-        )  # fmt: skip
+        result = _train(laser_dir, out, "--epochs", "1", "--stride", "16", "--seed", str(seed))
         assert result.exit_code == 0, result.output
         return torch.load(out, weights_only=True)["state_dict"]
 
@@ -147,10 +147,7 @@ def test_a_shorter_window_trains_and_is_scored_on_the_same_test_parts(
     laser_dir, laser_clips, small_checkpoint, tmp_path
 ) -> None:
     out = tmp_path / "w30.pt"
-    result = CliRunner().invoke(
-        app, ["train", "--data", str(laser_dir), "--split", "temporal", "--out", str(out),
-              "--epochs", "1", "--stride", "16", "--threads", "1", "--window", "30"],
-    )  # fmt: skip
+    result = _train(laser_dir, out, "--epochs", "1", "--stride", "16", "--window", "30")
     assert result.exit_code == 0, result.output
     clf = GestureClassifier.load(out)
     assert clf.window == 30 and clf.metadata["train_config"]["window"] == 30
@@ -180,8 +177,5 @@ def test_a_shorter_window_trains_and_is_scored_on_the_same_test_parts(
     for args, message in ((["--window", "10"], "window 10 frames: must lie between 15 and 60"),
                           (["--window", "30", "--init", str(small_checkpoint)],
                            "has 60-frame windows, not 30")):  # fmt: skip
-        result = CliRunner().invoke(
-            app, ["train", "--data", str(laser_dir), "--split", "temporal", "--epochs", "1",
-                  "--out", str(tmp_path / "x.pt"), "--threads", "1", *args],
-        )  # fmt: skip
+        result = _train(laser_dir, tmp_path / "x.pt", "--epochs", "1", *args)
         assert result.exit_code == 2 and message in result.output, result.output
