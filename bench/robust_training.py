@@ -29,7 +29,7 @@ from typing import Any
 
 import torch
 
-from proxima.control import ControlSettings
+from proxima.control import AVERAGE_RULE, ControlSettings
 from proxima.engine import load_classifier
 from proxima.engine.config import EngineSettings
 from proxima.evaluation.latency import evaluate_config
@@ -128,7 +128,7 @@ def streams_cmd(args: argparse.Namespace) -> dict:
     keys = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
     params = {k: best[k] for k in keys}
     evidence = ControlSettings(decision="evidence", **params)
-    rules = {"average": ControlSettings(), "evidence": evidence}
+    rules = {"average": AVERAGE_RULE, "evidence": evidence}
     result: dict = {"tuning": {"selected": best, "top": rows[:10], "configs": len(rows)}}
     if args.by_command:
         by_best, by_rows = tune_by_command(list(tune_sets.values()), evidence)

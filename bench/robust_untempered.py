@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from proxima.control import ControlSettings
+from proxima.control import AVERAGE_RULE, ControlSettings
 from proxima.evaluation.latency import evaluate_config
 from proxima.evaluation.replay import Recognitions
 from proxima.evaluation.robust_training import summary_row
@@ -33,7 +33,7 @@ def untempered(rec: Recognitions, temperature: float) -> Recognitions:
 def main() -> None:
     cache, temperature, out = Path(sys.argv[1]), float(sys.argv[2]), Path(sys.argv[3])
     _, eval_sets = pickle.loads(cache.read_bytes())
-    rules = {"average": ControlSettings()}
+    rules = {"average": AVERAGE_RULE}
     if len(sys.argv) > 4:
         run = json.loads(Path(sys.argv[4]).read_text())
         rules["evidence"] = ControlSettings.model_validate(run["result"]["evidence"]["control"])

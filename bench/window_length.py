@@ -2,9 +2,10 @@
 with `proxima train --window N` (seeds as given), each scored as `proxima evaluate`
 scores it and on the stitched held-out streams of `bench.robust_training streams`
 (12 evaluation streams, 6 tuning streams, 30 gestures each, clean and `field` level 1),
-with three decision rules: the evidence rule tuned on the tuning streams, the moving
-average at the model's fitted temperature, and the moving average at T = 1 (what the
-shipped checkpoint uses); headline figures per view as well. With several seeds, also
+with four decision rules: the evidence rule tuned on the tuning streams, the moving
+average at the model's fitted temperature, the moving average at T = 1 (the shipped
+decision until 2026-12-05) and the shipped defaults (`ControlSettings()`, the evidence
+rule since then); headline figures per view as well. With several seeds, also
 one evidence setting for all of them (`evidence_shared`: tuned on every seed's tuning
 streams pooled), as a shipped default would have to be.
 
@@ -31,7 +32,7 @@ import torch
 
 from bench.robust_training import log, recognised_streams, write_doc
 from bench.robust_untempered import untempered
-from proxima.control import ControlSettings
+from proxima.control import AVERAGE_RULE, ControlSettings
 from proxima.engine import load_classifier
 from proxima.evaluation.latency import evaluate_config
 from proxima.evaluation.metrics import evaluate_checkpoint
@@ -103,8 +104,9 @@ def score_checkpoint(checkpoint: str, sets: tuple) -> dict[str, Any]:
         "window_accuracy_per_view": {v: r["accuracy"] for v, r in windows["per_view"].items()},
         "evidence_setting": {k: best[k] for k in EVIDENCE_KEYS},
         "evidence": score_rule(eval_sets, evidence, None),
-        "average_fitted_T": score_rule(eval_sets, ControlSettings(), None),
-        "average_T1": score_rule(eval_sets, ControlSettings(), temperature),
+        "average_fitted_T": score_rule(eval_sets, AVERAGE_RULE, None),
+        "average_T1": score_rule(eval_sets, AVERAGE_RULE, temperature),
+        "defaults": score_rule(eval_sets, ControlSettings(), None),
         "stream_hours": {
             k: round(sum(x.duration_s for x in s) / 3600, 3) for k, (s, _) in eval_sets.items()
         },
@@ -115,7 +117,7 @@ def means(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Per rule and condition, each headline figure's mean over the seeds."""
     accuracy = float(np.mean([r["window_accuracy"] for r in rows]))
     out: dict[str, Any] = {"window_accuracy": round(accuracy, 4)}
-    for rule in ("evidence", "average_fitted_T", "average_T1"):
+    for rule in ("evidence", "average_fitted_T", "average_T1", "defaults"):
         for cond in ("clean", "field1"):
             out[f"{rule}/{cond}"] = mean_headline([r[rule][cond] for r in rows])
     return out

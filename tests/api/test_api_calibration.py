@@ -69,6 +69,9 @@ def test_calibrate_a_stream_and_promote_for_it_only(tmp_path: Path, checkpoint_p
     )
     runtime = build_runtime(settings, engine=True, drones=False, view=False)
     assert runtime.engine is not None, runtime.notes
+    # federated runs train models of the live model's window length by default
+    assert runtime.training is not None, runtime.notes
+    assert runtime.training.defaults.window == runtime.engine.classifier("front").window
     console = runtime.app.state.console
     try:
         with BackgroundServer(runtime.app) as server:

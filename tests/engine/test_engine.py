@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from proxima.control import ControlSettings
+from proxima.control import AVERAGE_RULE, ControlSettings
 from proxima.engine import Engine, JsonlWriter, StreamSpec
 from proxima.evaluation.stitch import Blank, stitch_views
 from proxima.events import EventBus
@@ -58,7 +58,8 @@ def test_secondary_takes_over_and_commands_the_main_drone(
         StreamSpec(name="x500", uri=f"replay:{front}"),
         StreamSpec(name="dji", uri=f"replay:{right}"),
     ]
-    events, engine = collect({"classifier": classifier}, specs)
+    # with the rule it was tuned with (it is uncalibrated: temperature 1)
+    events, engine = collect({"classifier": classifier, "control": AVERAGE_RULE}, specs)
     assert engine.drone == "x500"
     handovers = [
         (e["from_stream"], e["to_stream"], e["reason"])

@@ -52,7 +52,8 @@ def test_evaluate_scores_an_ensemble_of_comma_joined_checkpoints(
                                 "cross-view:l", stride=12)  # fmt: skip
     assert twice["confusion"] == one["confusion"] and twice["windows"] == one["windows"]
     assert twice["model"] == "tcn+tcn"
-    shipped = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
+    # another real 60-frame model (the shipped one has 30-frame windows)
+    shipped = Path(__file__).resolve().parents[2] / "tests" / "data" / "gesture-capture-60.pt"
     pair = f"{small_checkpoint},{shipped}"
     out = tmp_path / "pair.json"
     result = CliRunner().invoke(app, ["evaluate", "--checkpoint", pair, "--data", str(laser_dir),

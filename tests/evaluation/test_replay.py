@@ -107,10 +107,11 @@ def test_the_replay_source_gives_the_frames_the_engine_reads_back(lost_stream, t
 
 def test_the_memo_classifier_answers_as_the_classifier_and_remembers(laser_clips, shipped) -> None:
     clip = laser_clips[0]
-    xyz = clip.xyz[None, :60]
+    w = shipped.window
+    xyz = clip.xyz[None, :w]
     memo = MemoClassifier(shipped)
     first = memo.predict(xyz, aspect=16 / 9)
     np.testing.assert_array_equal(first, shipped.predict(xyz, aspect=16 / 9))
     assert memo.predict(xyz.copy(), aspect=16 / 9) is first and len(memo) == 1
-    memo.predict(clip.xyz[None, 1:61], aspect=16 / 9)
+    memo.predict(clip.xyz[None, 1 : w + 1], aspect=16 / 9)
     assert len(memo) == 2

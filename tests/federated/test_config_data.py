@@ -127,7 +127,8 @@ def test_init_starts_the_global_model_from_a_checkpoint(tmp_path) -> None:
     from proxima.gesture.classifier import GestureClassifier, default_checkpoint
 
     shipped = default_checkpoint()
-    cfg = fast_config(init=str(shipped))
+    window = GestureClassifier.load(shipped).window
+    cfg = fast_config(init=str(shipped), window=window)
     model, _ = start_model(cfg)
     want = get_weights(GestureClassifier.load(shipped).model)
     got = get_weights(model)
@@ -140,7 +141,9 @@ def test_init_starts_the_global_model_from_a_checkpoint(tmp_path) -> None:
     with pytest.raises(ConfigError, match=r"'init': .*missing.pt"):
         start_model(fast_config(init=str(tmp_path / "missing.pt")))
     with pytest.raises(ConfigError, match=r"'init': .* a tcn model .* this run trains paper-lstm"):
-        start_model(fast_config(init=str(shipped), model="paper-lstm"))
+        start_model(fast_config(init=str(shipped), model="paper-lstm", window=window))
+    with pytest.raises(ConfigError, match=rf"'init': .*has {window}-frame windows, not 60"):
+        start_model(fast_config(init=str(shipped), window=60))
 
 
 def test_the_window_key_sets_the_drones_window_length(laser_clips) -> None:

@@ -11,8 +11,8 @@ from proxima.gesture.ensemble import EnsembleClassifier
 from proxima.types import GESTURES
 
 ROOT = Path(__file__).resolve().parents[2]
-MEMBERS = (
-    ROOT / "models" / "gesture-default.pt",
+MEMBERS = (  # two real models of one window length (tests/data/README.md)
+    ROOT / "tests" / "data" / "gesture-capture-60.pt",
     ROOT / "tests" / "data" / "gesture-no-capture.pt",
 )
 

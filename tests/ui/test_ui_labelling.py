@@ -27,7 +27,7 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
         page.wait_for_selector("table.samples .empty-list:has-text('No samples yet')")
         page.select_option("select.stream", "front")
         page.wait_for_function("() => document.querySelector('canvas.preview').dataset.poseT")
-        page.fill("input.frames", "45")
+        page.fill("input.frames", "24")  # under the 30-frame window: padded
         page.fill("input.countdown", "1.5")
         # A wrong label on purpose: the model's reading must disagree and say so.
         page.select_option("select.gesture", "move_upward")
@@ -35,7 +35,7 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
         page.wait_for_selector(".rec-status.countdown")  # the countdown is shown first
         page.wait_for_selector(".review-box:not([hidden])")
         title = page.inner_text(".review-title")
-        assert "45 frames of front for main (pending)" in title
+        assert "24 frames of front for main (pending)" in title
         # The review canvas plays the recorded skeleton.
         first = page.get_attribute("canvas.review", "data-frame")
         page.wait_for_function(
@@ -50,7 +50,7 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
             headers={"Authorization": f"Bearer {token}"},
             timeout=60,
         ).json()
-        assert read["frames"] == 45 and read["padded"] and read["gesture"] != "move_upward", read
+        assert read["frames"] == 24 and read["padded"] and read["gesture"] != "move_upward", read
         page.wait_for_selector(f".reading.warn:has-text('reads this as {read['gesture']}')")
         assert "not move_upward" in page.inner_text(".reading")
         page.select_option("select.gesture", "land_direction")
@@ -63,7 +63,7 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
         row = page.wait_for_selector("table.samples tbody tr.st-kept")
         assert row.query_selector(".label").inner_text() == "land_direction"
         cells = [c.inner_text() for c in row.query_selector_all("td")]
-        assert cells[2:] == ["front", "main", "land_direction", "kept", "45"]
+        assert cells[2:] == ["front", "main", "land_direction", "kept", "24"]
         assert page.is_disabled("button.keep")  # kept once is kept
         # The gesture chosen stays chosen after leaving the page.
         page.click("nav a[data-page=live]")
@@ -73,7 +73,7 @@ def test_record_label_and_list(page, tmp_path: Path) -> None:  # type: ignore[no
         assert page.eval_on_selector("select.gesture", "s => s.value") == "land_direction"
         with console.runtime.app.state.console.sessions() as db:
             kept = kept_samples(db, "main")
-        assert [(k.label, k.xyz.shape) for k in kept] == [("land_direction", (45, 33, 3))]
+        assert [(k.label, k.xyz.shape) for k in kept] == [("land_direction", (24, 33, 3))]
     finally:
         feed.stop()
         console.close()

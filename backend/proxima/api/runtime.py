@@ -245,14 +245,20 @@ def build_runtime(
 
     if training if training is not None else settings.training.enabled:
         try:
+            from proxima.federated.config import FLConfig
             from proxima.federated.runner import FederatedRunner
 
+            # Runs train models the live engine can take: its window length by default.
+            defaults = None
+            if rt.engine is not None:
+                defaults = FLConfig(window=rt.engine.classifier(rt.engine.specs[0].name).window)
             rt.training = FederatedRunner(
                 settings.server.db_path,
                 settings.server.models_dir,
                 bus=bus,
                 flower_runtime=settings.training.flower_runtime,
                 drones=federated_drones(settings),
+                defaults=defaults,
                 security=settings.training,
             )
         except Exception as exc:

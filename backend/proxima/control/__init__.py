@@ -1,15 +1,20 @@
 """From recognitions to commands: the moving-average filter, the debounce, arming and the
 priority arbiter across the streams that watch the operator.
 
-Public API: `ControlSettings`, `MovingAverageFilter`, `HandEvidence`, `CommandGate`,
-`Arming`, `PriorityArbiter`, `EvidenceAccumulator` (`decision_filter`), `Sight`,
-`CommandController`, `StreamUpdate`, `WindowEvidence`. Everything runs on stream time.
+Public API: `ControlSettings` (`AVERAGE_RULE`), `MovingAverageFilter`, `HandEvidence`,
+`CommandGate`, `Arming`, `PriorityArbiter`, `EvidenceAccumulator` (`decision_filter`),
+`Sight`, `CommandController`, `StreamUpdate`, `WindowEvidence`. Everything runs on stream time.
 """
 
-from proxima.control.accumulate import DecisionFilter, EvidenceAccumulator, decision_filter
+from proxima.control.accumulate import (
+    DecisionFilter,
+    EvidenceAccumulator,
+    decide_window,
+    decision_filter,
+)
 from proxima.control.arbiter import Handover, PriorityArbiter, Sight
 from proxima.control.arming import ABORT_GESTURE, ARM_GESTURE, Arming
-from proxima.control.config import ControlSettings
+from proxima.control.config import AVERAGE_RULE, ControlSettings
 from proxima.control.controller import (
     SAFE_COMMAND,
     CommandController,
@@ -23,6 +28,7 @@ from proxima.control.smoothing import FilteredAction, MovingAverageFilter
 __all__ = [
     "ABORT_GESTURE",
     "ARM_GESTURE",
+    "AVERAGE_RULE",
     "SAFE_COMMAND",
     "Arming",
     "CommandController",
@@ -38,5 +44,6 @@ __all__ = [
     "Sight",
     "StreamUpdate",
     "WindowEvidence",
+    "decide_window",
     "decision_filter",
 ]

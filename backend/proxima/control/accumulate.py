@@ -32,9 +32,13 @@ P_FLOOR = 1e-6  # probabilities are clipped to [P_FLOOR, 1 - P_FLOOR] before the
 class DecisionFilter(Protocol):
     """What the stream pipeline needs of a decision rule over recognitions."""
 
+    labels: tuple[str, ...]
+
     def reset(self) -> None: ...
 
     def update(self, t: float, probs: np.ndarray) -> FilteredAction: ...
+
+    def withhold(self, labels: Sequence[str]) -> None: ...
 
 
 class EvidenceAccumulator:
@@ -101,6 +105,23 @@ class EvidenceAccumulator:
         best = int(np.argmax(share))
         action = self.labels[best] if share[best] >= 1.0 else ""
         return FilteredAction(t=t, action=action, confidence=float(min(share[best], 1.0)), probs=p)
+
+    def withhold(self, labels: Sequence[str]) -> None:
+        """The newest window cannot tell `labels` apart (the hand evidence): their evidence
+        so far was a guess, so it is dropped, and a thumb gesture needs `threshold` from
+        windows that see the hand in a row."""
+        for label in labels:
+            self.score[self.labels.index(label)] = 0.0
+
+
+def decide_window(
+    rule: DecisionFilter, t: float, probs: np.ndarray, withheld: Sequence[str]
+) -> tuple[FilteredAction, str]:
+    """One recognition through `rule`; the gestures the window cannot tell (`withheld`)
+    are neither the action nor kept as evidence. Returns the decision and the action."""
+    decision = rule.update(t, probs)
+    rule.withhold(withheld)
+    return decision, "" if decision.action in withheld else decision.action
 
 
 def decision_filter(control: ControlSettings, labels: Sequence[str]) -> DecisionFilter:

@@ -92,3 +92,7 @@ class MovingAverageFilter:
         needed = self.thresholds.get(self.labels[best], self.threshold)
         action = self.labels[best] if full and confidence >= needed else ""
         return FilteredAction(t=t, action=action, confidence=confidence, probs=mean)
+
+    def withhold(self, labels: Sequence[str]) -> None:
+        """Nothing to drop: the average forgets in `size` recognitions, and with `confirm`
+        2 (`AVERAGE_RULE`) two newest windows in a row must see the hand."""

@@ -19,8 +19,8 @@ sharpen, a poorly seen one counts less). A window whose own top probability reac
 agree with its top label: the other cameras may sharpen it but not overrule it, since a
 camera that reads a gesture wrongly is often just as sure (side views under z jitter,
 docs/experiments.md "Fusion"; 0.9 and 1 gave more wrong commands there). The fused
-vector goes through that stream's own fused moving-average filter (the same
-`MovingAverageFilter`, emptied whenever the stream's own one is) and the hand evidence,
+vector goes through that stream's own fused decision rule (the stream's own kind,
+`decision_filter`, emptied whenever the stream's own one is) and the hand evidence,
 and its action replaces the stream's in the update; the controller then does what it
 always does, so only the driving stream's action counts and every command goes to the
 controlled drone.
@@ -43,11 +43,12 @@ import numpy as np
 from proxima.control import (
     CommandController,
     ControlSettings,
-    HandEvidence,
-    MovingAverageFilter,
+    DecisionFilter,
     Sight,
     StreamUpdate,
     WindowEvidence,
+    decide_window,
+    decision_filter,
 )
 from proxima.control.evidence import THUMB_GESTURES
 from proxima.engine.config import EngineSettings
@@ -164,7 +165,7 @@ class FusedDecisions:
         self.settings = settings or EngineSettings()
         self.listener = listener
         self._newest: dict[str, tuple[float, WindowEvidence]] = {}
-        self._filters: dict[str, MovingAverageFilter] = {}
+        self._filters: dict[str, DecisionFilter] = {}
 
     @property
     def active(self) -> str:
@@ -195,13 +196,10 @@ class FusedDecisions:
         fused = fuse((stream, evidence), others, self.settings.fusion_overrule_below)
         filt = self._filters.get(stream)
         if filt is None or filt.labels != evidence.labels:
-            filt = self._filters[stream] = MovingAverageFilter.from_settings(
-                self.control, evidence.labels
-            )
+            filt = self._filters[stream] = decision_filter(self.control, evidence.labels)
         if evidence.restarted:
             filt.reset()
-        decision = filt.update(t, fused.probs)
-        action = HandEvidence.action(decision.action, fused.withheld)
+        decision, action = decide_window(filt, t, fused.probs, fused.withheld)
         if self.listener is not None:
             self.listener(stream, t, fused)
         return StreamUpdate(stream, t, update.sight, action, decision.confidence, evidence=evidence)

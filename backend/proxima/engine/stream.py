@@ -39,6 +39,7 @@ from proxima.control import (
     HandEvidence,
     Sight,
     StreamUpdate,
+    decide_window,
     decision_filter,
 )
 from proxima.engine.config import EngineSettings, StreamSpec
@@ -277,8 +278,7 @@ class StreamPipeline:
                 withheld=withheld,
             )
         )
-        decision = self.filter.update(t, probs)
-        action = self.evidence.action(decision.action, withheld)
+        decision, action = decide_window(self.filter, t, probs, withheld)
         self.publish(
             ActionEvent(
                 t=t,

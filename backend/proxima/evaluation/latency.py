@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from proxima.control import ControlSettings
+from proxima.control import AVERAGE_RULE, ControlSettings
 from proxima.engine.config import EngineSettings
 from proxima.engine.stream import Classifier
 from proxima.evaluation.replay import MemoClassifier, Recognitions, Run, decide, engine_run
@@ -87,9 +87,10 @@ def recognize_all(
 def onset_stages(stream: StitchedStream, run: Run, filter_size: int) -> list[dict[str, Any]]:
     """Where the time from onset to command goes, per gesture performed in `stream`, from
     an offline replay's `run`: seconds from its onset until the classifier names it in
-    `filter_size` recognitions running (`named_s`), until the moving-average filter
-    passes it (`passed_s`: its averaged probability reached its threshold) and until its
-    command (`commanded_s`); None when that did not happen before the next gesture began."""
+    `filter_size` recognitions running (`named_s`), until the decision rule passes it
+    (`passed_s`: its averaged probability or its evidence reached its threshold) and
+    until its command (`commanded_s`); None when that did not happen before the next
+    gesture began."""
     # (t, top label, recognitions running with that top label, what the filter passed);
     # runs restart with the window, as the filter does
     recognitions: list[tuple[float, str, int, str]] = []
@@ -280,7 +281,8 @@ def measure(
 ) -> LatencyReport:
     """Run the benchmark (see the module) with `classifier` on the LASER `clips`."""
     settings = EngineSettings()
-    control = ControlSettings()
+    # Tuning searches the moving average's grid; without it, the shipped defaults.
+    control = AVERAGE_RULE if config.tune else ControlSettings()
     result: dict[str, Any] = {}
     if config.tune:
         seeds = list(range(config.tune_streams))
@@ -365,7 +367,7 @@ def measure(
         per_view_gesture={v: s.summary()["latency_by_gesture"] for v, s in per_view.items()},
         stages={
             "method": "offline replay; named: the classifier's top label in filter_size "
-            "recognitions running; passed: the moving-average filter passes it; "
+            "recognitions running; passed: the decision rule passes it; "
             "commanded: its command. Figures over the gestures that were commanded",
             "all": stage_figures(stages),
             **{v: stage_figures([r for r in stages if r["view"] == v]) for v in VIEWS},

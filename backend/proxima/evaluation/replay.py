@@ -8,11 +8,11 @@
   engine's replay source delivers them, and keeps what no decision setting changes:
   each frame's update (the operator's sight) and, at each classified window, the
   classifier's probabilities, the gestures the hand evidence withheld and whether the
-  window had restarted. `decide` then runs the engine's own `MovingAverageFilter`,
-  `HandEvidence` and `CommandController` over them for one setting, in the order
-  `StreamPipeline.process` calls them, and gives the controller every frame's update, as
-  the engine's merge does for one stream. The window's own settings (stride, gap) and the
-  hand evidence's are fixed by `recognize`.
+  window had restarted. `decide` then runs the engine's own decision rule
+  (`decision_filter`, `decide_window` with the withheld gestures) and `CommandController`
+  over them for one setting, in the order `StreamPipeline.process` calls them, and gives
+  the controller every frame's update, as the engine's merge does for one stream. The
+  window's own settings (stride, gap) and the hand evidence's are fixed by `recognize`.
 """
 
 from __future__ import annotations
@@ -28,9 +28,9 @@ import numpy as np
 from proxima.control import (
     CommandController,
     ControlSettings,
-    HandEvidence,
     Sight,
     StreamUpdate,
+    decide_window,
     decision_filter,
 )
 from proxima.engine.config import EngineSettings, StreamSpec
@@ -263,7 +263,6 @@ def decide(rec: Recognitions, control: ControlSettings) -> Run:
             "recognize the stream again with them"
         )
     filt = decision_filter(control, rec.labels)
-    evidence = HandEvidence.from_settings(control)
     controller = CommandController([rec.stream], rec.stream, control)
     run = Run()
     updates = rec.updates
@@ -276,8 +275,7 @@ def decide(rec: Recognitions, control: ControlSettings) -> Run:
         probs = rec.probs[n]
         if rec.new_window[n]:
             filt.reset()
-        decision = filt.update(frame.t, probs)
-        action = evidence.action(decision.action, rec.withheld[n])
+        decision, action = decide_window(filt, frame.t, probs, rec.withheld[n])
         top = rec.labels[int(np.argmax(probs))]
         run.recognitions.append((frame.t, top, action, bool(rec.new_window[n])))
         update = StreamUpdate(frame.stream, frame.t, frame.sight, action, decision.confidence)

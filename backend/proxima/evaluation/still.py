@@ -27,22 +27,12 @@ from proxima.engine.config import EngineSettings
 from proxima.evaluation.replay import engine_run
 from proxima.evaluation.stitch import StitchedStream, smoothstep, stitch_views
 from proxima.gesture.clip import Clip
+from proxima.gesture.idle import STILL_SPEED, still_prefix
 
-ARMS = [13, 14, 15, 16]  # MediaPipe elbows and wrists
-STILL_SPEED = 0.006  # normalised image units per frame (x and y each run 0..1)
 MIN_FRAMES = 15  # half a second at 30 fps
 STILL_S = 10.0
 ARM_S = 6.0  # long enough for have_command to arm in every view
 FPS = 30.0
-
-
-def still_prefix(xyz: np.ndarray) -> int:
-    """Frames from the start of a clip (T, 33, 3) during which the elbows and wrists stay
-    still: their largest 2D step, averaged over 5 frames, at most STILL_SPEED."""
-    step = np.linalg.norm(np.diff(xyz[:, ARMS, :2], axis=0), axis=-1).max(axis=1)
-    smooth = np.convolve(step, np.ones(5) / 5, mode="same")
-    moving = np.flatnonzero(smooth > STILL_SPEED)
-    return int(moving[0]) if len(moving) else len(xyz)
 
 
 def back_and_forth(n: int, frames: int) -> np.ndarray:

@@ -62,6 +62,13 @@ def train(
     transitions: Annotated[
         float, typer.Option(help="Share of windows turned into gesture onsets (e.g. 0.3).")
     ] = 0.0,
+    trim_idle: Annotated[
+        bool,
+        typer.Option(
+            help="Start moving gestures' training clips where at most half a window of "
+            "the operator's opening rest is left."
+        ),
+    ] = True,
     augment: Annotated[
         str,
         typer.Option(
@@ -108,7 +115,8 @@ def train(
 
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, window=window,
                       max_gap=max_gap, seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
-                      transitions=transitions, refit=refit, augment=augment)  # fmt: skip
+                      transitions=transitions, refit=refit, augment=augment,
+                      trim_idle=trim_idle)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     if calibration_share is not None:

@@ -51,6 +51,9 @@ class TrainConfig:
     yaw_deg: float = 30.0  # extra yaw for windows with depth
     time_warp: float = 0.2  # +- change of speed (0.8x to 1.2x); 0 = off
     transitions: float = 0.0  # share of windows turned into a gesture onset; 0 = off
+    # Start moving gestures' training clips where at most half a window of the opening
+    # rest is left (gesture/idle.py): a window of rest shows no gesture.
+    trim_idle: bool = True
     # On: unseen side views 0.34 / 0.50 -> 0.55 / 0.76 (the other side view, mirrored,
     # looks like the unseen one); the temporal split stays within its seed-to-seed spread.
     mirror: bool = True

@@ -16,6 +16,7 @@ from proxima.gesture.clip import Clip, DataError
 from proxima.gesture.datasets import load_data
 from proxima.gesture.features import Pipeline, make_pipeline
 from proxima.gesture.geometry import to_metric
+from proxima.gesture.idle import trim_idle
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
 from proxima.gesture.robust import CaptureSource, history_rows
 from proxima.gesture.train import (
@@ -157,7 +158,7 @@ def train_model(
     data = load_data(data_specs)
     init_clf = load_init(init, split, model_name, win) if init is not None and calibrating else None
     parts = split_clips(data.clips, split, WINDOW, data.uav_dir)  # the protocol's gaps
-    train = parts.train
+    train = [trim_idle(c, win) for c in parts.train] if cfg.trim_idle else parts.train
     repeats = 0
     if parts.calibration:
         fit_parts, val_parts, repeats = calibration_fit_parts(

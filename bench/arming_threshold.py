@@ -1,0 +1,74 @@
+"""Per-command evidence thresholds for `have_command` (arming) and `wave_off` (abort) on
+top of the shared 30-frame evidence setting (16 nats, half-life 1 s, clip 3, confirm 1;
+`bench/window_length.py`, `evidence_shared`), on the cached recognitions of the three
+held-out 30-frame models: each pair is ranked on the tuning streams pooled
+(`latency.rank`: fewer than 1 wrong or spurious command per hour, then most on time)
+and reported on the evaluation streams (mean of the seeds, clean and `field` 1).
+
+    python -m bench.arming_threshold --model runs/window/w30-s0.pt,runs/window/w30-s1.pt,\
+runs/window/w30-s2.pt --cache-dir runs/window --out bench/results/arming_threshold.json
+
+The caches are `bench.window_length`'s (made there if missing).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import time
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from bench.robust_training import log, recognised_streams, write_doc
+from bench.window_length import cache_path, mean_headline, score_rule
+from proxima.control import ControlSettings
+from proxima.evaluation.latency import rank
+from proxima.evaluation.robust_training import evaluate_config, pool
+
+SHARED: dict[str, Any] = {
+    "evidence_threshold": 16.0,
+    "evidence_half_life_s": 1.0,
+    "evidence_clip": 3.0,
+    "confirm": 1,
+}
+GRID = {"have_command": [16.0, 12.0, 10.0, 8.0, 6.0], "wave_off": [16.0, 12.0, 8.0, 6.0]}
+KEYS = ("hit_rate", "on_time_rate", "wrong_or_spurious_per_hour", "latency_p95_s")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--model", required=True, help="CKPT,CKPT,...: the held-out seeds")
+    ap.add_argument("--streams", type=int, default=12)
+    ap.add_argument("--tune-streams", type=int, default=6)
+    ap.add_argument("--segments", type=int, default=30)
+    ap.add_argument("--cache-dir", type=Path, default=Path("runs/window"))
+    ap.add_argument("--out", type=Path, default=Path("bench/results/arming_threshold.json"))
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    t0 = time.perf_counter()
+    checkpoints = args.model.split(",")
+    sets = [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
+    rows: list[dict[str, Any]] = []
+    for values in itertools.product(*GRID.values()):
+        table = {
+            g: v for g, v in zip(GRID, values, strict=True) if v != SHARED["evidence_threshold"]
+        }
+        control = ControlSettings(
+            decision="evidence", **SHARED, evidence_threshold_by_command=table
+        )
+        tune = pool([evaluate_config(s, r, control) for ts, _ in sets for s, r in ts.values()])
+        per_seed = [score_rule(es, control, None) for _, es in sets]
+        mean = {c: mean_headline([p[c] for p in per_seed]) for c in ("clean", "field1")}
+        rows.append({"by_command": table, "tuning": {k: tune.get(k) for k in KEYS},
+                     "rank": list(rank(tune)), "eval_mean": mean})  # fmt: skip
+        log(f"{table}: tuning {rows[-1]['tuning']} | field1 {mean['field1']}")
+    best = max(rows, key=lambda r: tuple(r["rank"]))
+    log(f"selected on the tuning streams: {best['by_command']}")
+    result = {"shared": SHARED, "checkpoints": checkpoints, "selected": best, "rows": rows}
+    write_doc(args.out, "arming_threshold", "arming_threshold", result, t0)
+
+
+if __name__ == "__main__":
+    main()
