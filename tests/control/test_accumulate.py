@@ -118,3 +118,17 @@ def test_a_thumb_gesture_counts_only_windows_that_see_the_hand() -> None:
     avg = MovingAverageFilter(labels, 3, 0.8)
     assert [decide_window(avg, k / 6, p, THUMB_GESTURES if k < 2 else [])[1]
             for k in range(3)] == ["", "", "all_clear"]  # fmt: skip
+
+
+def test_evidence_accrues_per_stream_second_whatever_the_frame_rate() -> None:
+    # Stride 5 at 30 fps recognises every 1/6 s, at 15 fps every 1/3 s: the same
+    # confident gesture fires at about the same stream time, at the shipped 16 nats too.
+    labels = ("a", "b", "c")
+    p = np.array([0.9, 0.05, 0.05])  # 2.2 nats per 1/6 s
+    fired = {}
+    for fps in (30, 15, 10):
+        rule = EvidenceAccumulator(labels, threshold=16.0, half_life_s=1.0)
+        dt = 5 / fps
+        fired[fps] = next(k * dt for k in range(100) if rule.update(k * dt, p).action == "a")
+    assert fired[30] == pytest.approx(13 / 6)  # the 14th recognition
+    assert abs(fired[15] - fired[30]) <= 1 / 3 and abs(fired[10] - fired[30]) <= 0.5

@@ -9,7 +9,12 @@ half-life of `half_life_s` stream seconds and never falls below 0 (a CUSUM): a g
 named at 0.7 gains 0.85 a window and fires after a few, one named at 0.97 after two;
 a gesture the classifier keeps below 0.5 only loses, so a mix where no gesture holds the
 majority never fires. The action is the gesture of the highest score once that reaches
-`threshold` (or its own entry in `thresholds`). The probabilities should be calibrated
+`threshold` (or its own entry in `thresholds`). Evidence accrues per stream second, not
+per recognition: a recognition adds its log-odds times the seconds since the previous
+one over `REFERENCE_INTERVAL_S` (stride 5 at 30 fps, where the settings were tuned), so
+a 15 fps camera, with half the recognitions, arms as fast as a 30 fps one (counted per
+recognition it could never reach 16 nats: 3 a window at most, halving every second).
+The probabilities should be calibrated
 (the checkpoint's temperature, gesture/calibration.py) for the log-odds to mean what
 they say. The score empties after a pause of `reset_after_s` or on `reset()`.
 """
@@ -27,6 +32,7 @@ if TYPE_CHECKING:
     from proxima.control.config import ControlSettings
 
 P_FLOOR = 1e-6  # probabilities are clipped to [P_FLOOR, 1 - P_FLOOR] before the log-odds
+REFERENCE_INTERVAL_S = 5 / 30  # one recognition's worth of stream time (stride 5, 30 fps)
 
 
 class DecisionFilter(Protocol):
@@ -97,10 +103,13 @@ class EvidenceAccumulator:
             self.reset()
         dt = 0.0 if self._last_t is None else max(t - self._last_t, 0.0)
         decay = 0.5 ** (dt / self.half_life_s)
+        # the stream time this recognition stands for (the first: one reference interval);
+        # rounded so that 30 fps at stride 5 weighs exactly 1
+        weight = 1.0 if self._last_t is None else round(dt / REFERENCE_INTERVAL_S, 6)
         self._last_t = t
         q = np.clip(p, P_FLOOR, 1.0 - P_FLOOR)
         llr = np.clip(np.log(q) - np.log1p(-q), -self.clip, self.clip)
-        self.score = np.maximum(decay * self.score + llr, 0.0)
+        self.score = np.maximum(decay * self.score + weight * llr, 0.0)
         share = self.score / self._need
         best = int(np.argmax(share))
         action = self.labels[best] if share[best] >= 1.0 else ""
