@@ -44,10 +44,11 @@ class ControlSettings(BaseModel):
     The paper averages three recognitions and waits 10 s between commands (10.4 s
     response). The default is the evidence rule at the one setting chosen for every seed
     of the 30-frame recipe on held-out streams (`bench/window_length.py`,
-    `evidence_shared`: 16 nats, half-life 1 s, clip 3, one decision): under the `field`
-    capture condition 83 % of commands with 1 wrong in 1.5 h, where the moving average
-    gave 82 % with 12 (docs/recognition.md). `AVERAGE_RULE` below is the moving average
-    as it was tuned (the default until 2026-12-05).
+    `evidence_shared`: 16 nats, half-life 1 s, clip 3, one decision; `have_command` 12):
+    on those seeds' held-out streams under the `field` capture condition 85 % of commands
+    with 3 wrong in 1.5 h, where the moving average at T = 1 gave 86 % with 21
+    (`bench/results/window_length-defaults.json`, docs/recognition.md). `AVERAGE_RULE`
+    below is the moving average as it was tuned (the default until 2026-12-05).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -79,7 +80,10 @@ class ControlSettings(BaseModel):
         1.0, gt=0.0, description="evidence rule: stream seconds in which evidence halves"
     )
     evidence_clip: float = Field(
-        3.0, gt=0.0, description="evidence rule: most log-odds one recognition adds or takes"
+        3.0,
+        gt=0.0,
+        description="evidence rule: most log-odds one recognition adds or takes per 1/6 s "
+        "of stream (it weighs the seconds since the previous one)",
     )
     confirm: int = Field(
         1, ge=1, description="consecutive filtered decisions that must agree before a command"
