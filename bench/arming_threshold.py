@@ -21,11 +21,9 @@ from typing import Any
 
 import torch
 
-from bench.robust_training import log, recognised_streams, write_doc
-from bench.window_length import cache_path, mean_headline, score_rule
+from bench.robust_training import log, write_doc
+from bench.window_length import add_stream_args, held_out_sets, score_setting
 from proxima.control import ControlSettings
-from proxima.evaluation.latency import rank
-from proxima.evaluation.robust_training import evaluate_config, pool
 
 SHARED: dict[str, Any] = {
     "evidence_threshold": 16.0,
@@ -34,22 +32,18 @@ SHARED: dict[str, Any] = {
     "confirm": 1,
 }
 GRID = {"have_command": [16.0, 12.0, 10.0, 8.0, 6.0], "wave_off": [16.0, 12.0, 8.0, 6.0]}
-KEYS = ("hit_rate", "on_time_rate", "wrong_or_spurious_per_hour", "latency_p95_s")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--model", required=True, help="CKPT,CKPT,...: the held-out seeds")
-    ap.add_argument("--streams", type=int, default=12)
-    ap.add_argument("--tune-streams", type=int, default=6)
-    ap.add_argument("--segments", type=int, default=30)
-    ap.add_argument("--cache-dir", type=Path, default=Path("runs/window"))
+    add_stream_args(ap)
     ap.add_argument("--out", type=Path, default=Path("bench/results/arming_threshold.json"))
     args = ap.parse_args()
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     checkpoints = args.model.split(",")
-    sets = [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
+    sets = held_out_sets(checkpoints, args)
     rows: list[dict[str, Any]] = []
     for values in itertools.product(*GRID.values()):
         table = {
@@ -58,12 +52,8 @@ def main() -> None:
         control = ControlSettings(
             decision="evidence", **SHARED, evidence_threshold_by_command=table
         )
-        tune = pool([evaluate_config(s, r, control) for ts, _ in sets for s, r in ts.values()])
-        per_seed = [score_rule(es, control, None) for _, es in sets]
-        mean = {c: mean_headline([p[c] for p in per_seed]) for c in ("clean", "field1")}
-        rows.append({"by_command": table, "tuning": {k: tune.get(k) for k in KEYS},
-                     "rank": list(rank(tune)), "eval_mean": mean})  # fmt: skip
-        log(f"{table}: tuning {rows[-1]['tuning']} | field1 {mean['field1']}")
+        rows.append({"by_command": table, **score_setting(sets, control)})
+        log(f"{table}: tuning {rows[-1]['tuning']} | field1 {rows[-1]['eval_mean']['field1']}")
     best = max(rows, key=lambda r: tuple(r["rank"]))
     log(f"selected on the tuning streams: {best['by_command']}")
     result = {"shared": SHARED, "checkpoints": checkpoints, "selected": best, "rows": rows}

@@ -16,15 +16,12 @@ import argparse
 import itertools
 import time
 from pathlib import Path
-from typing import Any
 
 import torch
 
-from bench.robust_training import log, recognised_streams, write_doc
-from bench.window_length import cache_path, mean_headline, score_rule
+from bench.robust_training import log, write_doc
+from bench.window_length import add_stream_args, held_out_sets, score_setting
 from proxima.control import ControlSettings
-from proxima.evaluation.latency import rank
-from proxima.evaluation.robust_training import evaluate_config, pool
 
 GRID: dict[str, list[float]] = {
     "evidence_threshold": [12.0, 16.0, 20.0, 24.0],
@@ -33,7 +30,6 @@ GRID: dict[str, list[float]] = {
     "have_command": [0.75, 0.875, 1.0],  # shares of the threshold
     "wave_off": [1.0, 1.25],
 }
-KEYS = ("hit_rate", "on_time_rate", "wrong_or_spurious_per_hour")
 
 
 def control_for(values: dict[str, float]) -> ControlSettings:
@@ -49,34 +45,24 @@ def control_for(values: dict[str, float]) -> ControlSettings:
     )
 
 
-def row(sets: list, control: ControlSettings) -> dict[str, Any]:
-    tune = pool([evaluate_config(s, r, control) for ts, _ in sets for s, r in ts.values()])
-    per_seed = [score_rule(es, control, None) for _, es in sets]
-    mean = {c: mean_headline([p[c] for p in per_seed]) for c in ("clean", "field1")}
-    return {"tuning": {k: tune.get(k) for k in KEYS}, "rank": list(rank(tune)), "eval_mean": mean}
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--model", required=True, help="CKPT,CKPT,...: the held-out seeds")
-    ap.add_argument("--streams", type=int, default=12)
-    ap.add_argument("--tune-streams", type=int, default=6)
-    ap.add_argument("--segments", type=int, default=30)
-    ap.add_argument("--cache-dir", type=Path, default=Path("runs/window"))
+    add_stream_args(ap)
     ap.add_argument("--out", type=Path, default=Path("bench/results/evidence_retune.json"))
     args = ap.parse_args()
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     checkpoints = args.model.split(",")
-    sets = [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
+    sets = held_out_sets(checkpoints, args)
     rows = []
     for n, values in enumerate(itertools.product(*GRID.values()), 1):
         setting = dict(zip(GRID, values, strict=True))
-        rows.append({"setting": setting, **row(sets, control_for(setting))})
+        rows.append({"setting": setting, **score_setting(sets, control_for(setting))})
         if n % 12 == 0:
             log(f"{n} settings scored")
     rows.sort(key=lambda r: tuple(r["rank"]), reverse=True)
-    defaults = row(sets, ControlSettings())
+    defaults = score_setting(sets, ControlSettings())
     log(f"selected on the tuning streams: {rows[0]['setting']} -> {rows[0]['eval_mean']}")
     log(f"shipped defaults: {defaults['tuning']} -> {defaults['eval_mean']}")
     result = {"checkpoints": checkpoints, "grid": GRID, "defaults": defaults,

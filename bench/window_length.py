@@ -34,12 +34,9 @@ from bench.robust_training import log, recognised_streams, write_doc
 from bench.robust_untempered import untempered
 from proxima.control import AVERAGE_RULE, ControlSettings
 from proxima.engine import load_classifier
-from proxima.evaluation.latency import evaluate_config
+from proxima.evaluation.latency import evaluate_config, rank
 from proxima.evaluation.metrics import evaluate_checkpoint
-from proxima.evaluation.robust_training import (
-    summary_row,
-    tune_evidence,
-)
+from proxima.evaluation.robust_training import pool, summary_row, tune_evidence
 
 EVIDENCE_KEYS = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
 HEADLINE = ("hit_rate", "on_time_rate", "latency_median_s", "latency_p95_s", "wrong", "repeats")
@@ -113,6 +110,32 @@ def score_checkpoint(checkpoint: str, sets: tuple) -> dict[str, Any]:
     }
 
 
+def add_stream_args(ap: argparse.ArgumentParser) -> None:
+    """The held-out streams' size and the recognitions' cache folder."""
+    ap.add_argument("--streams", type=int, default=12)
+    ap.add_argument("--tune-streams", type=int, default=6)
+    ap.add_argument("--segments", type=int, default=30)
+    ap.add_argument("--cache-dir", type=Path, default=Path("runs/window"))
+
+
+def held_out_sets(checkpoints: list[str], args: argparse.Namespace) -> list[tuple]:
+    """Each checkpoint's (tuning, evaluation) recognised streams, cached."""
+    return [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
+
+
+TUNING_KEYS = ("hit_rate", "on_time_rate", "wrong_or_spurious_per_hour")
+
+
+def score_setting(sets: list[tuple], control: ControlSettings) -> dict[str, Any]:
+    """One decision setting over several seeds: its figures on their tuning streams
+    pooled, its `latency.rank` there, and its evaluation figures' mean over the seeds."""
+    tune = pool([evaluate_config(s, r, control) for ts, _ in sets for s, r in ts.values()])
+    per_seed = [score_rule(es, control, None) for _, es in sets]
+    mean = {c: mean_headline([p[c] for p in per_seed]) for c in ("clean", "field1")}
+    return {"tuning": {k: tune.get(k) for k in TUNING_KEYS}, "rank": list(rank(tune)),
+            "eval_mean": mean}  # fmt: skip
+
+
 def means(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Per rule and condition, each headline figure's mean over the seeds."""
     accuracy = float(np.mean([r["window_accuracy"] for r in rows]))
@@ -127,10 +150,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--model", action="append", required=True,
                     help="LABEL=CKPT[,CKPT...]: the seeds of one window length")  # fmt: skip
-    ap.add_argument("--streams", type=int, default=12)
-    ap.add_argument("--tune-streams", type=int, default=6)
-    ap.add_argument("--segments", type=int, default=30)
-    ap.add_argument("--cache-dir", type=Path, default=Path("runs/window"))
+    add_stream_args(ap)
     ap.add_argument("--out", type=Path, default=Path("bench/results/window_length.json"))
     args = ap.parse_args()
     torch.set_num_threads(1)
@@ -139,7 +159,7 @@ def main() -> None:
     for spec in args.model:
         label, _, paths = spec.partition("=")
         checkpoints = paths.split(",")
-        sets = [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
+        sets = held_out_sets(checkpoints, args)
         rows = []
         for path, recognised in zip(checkpoints, sets, strict=True):
             log(f"{label}: {path}")
