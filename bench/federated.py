@@ -79,6 +79,7 @@ def centralised(
     init: str = "",
     keep: Path | None = None,
     seed: int = 0,
+    window: int = 60,
 ) -> dict[str, Any]:
     from proxima.evaluation.metrics import evaluate_checkpoint
     from proxima.gesture.train import TrainConfig
@@ -87,7 +88,7 @@ def centralised(
     out: dict[str, Any] = {"load_average_at_start": load()}
     if checkpoint is None:
         tmp = keep or Path(tempfile.mkdtemp()) / "central.pt"
-        cfg = TrainConfig(threads=1, mirror=mirror, seed=seed)  # augment as the drones do
+        cfg = TrainConfig(threads=1, mirror=mirror, seed=seed, window=window)  # as the drones
         t0 = time.perf_counter()
         res = train_model(None, "tcn", "temporal", tmp, cfg, command="bench.federated",
                           init=init or None)  # fmt: skip
@@ -166,6 +167,8 @@ def main() -> None:
     ap.add_argument("--local-epochs", type=int, default=None, help="default: FLConfig's")
     ap.add_argument("--strategy", default=None, help="default: FLConfig's")
     ap.add_argument("--seed", type=int, default=0, help="seed of both runs (FLConfig, TrainConfig)")
+    ap.add_argument("--window", type=int, default=None, help="frames per window of both runs "
+                    "(default: FLConfig's)")  # fmt: skip
     ap.add_argument("--keep-central", type=Path, help="save the centralised checkpoint here")
     ap.add_argument("--out", type=Path, default=OUT, help="results JSON; the curve beside it")
     args = ap.parse_args()
@@ -182,6 +185,8 @@ def main() -> None:
         base = replace(base, mirror=args.mirror)
     if args.strategy is not None:
         base = replace(base, strategy=args.strategy)
+    if args.window is not None:
+        base = replace(base, window=args.window)
     results: dict[str, Any] = {
         "machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
                     "torch": torch.__version__, "flwr": _flwr_version()},
@@ -192,9 +197,10 @@ def main() -> None:
         "augment": base.augment,
         "strategy": base.strategy,
         "seed": base.seed,
+        "window": base.window,
     }  # fmt: skip
     central = centralised(args.central_checkpoint, base.test_stride, base.mirror, args.init,
-                          args.keep_central, args.seed)  # fmt: skip
+                          args.keep_central, args.seed, base.window)  # fmt: skip
     results["centralised"] = central
     print("centralised", central["accuracy"], flush=True)
     sim, _ = simulation(base, f"{args.rounds} rounds x 3 drones")

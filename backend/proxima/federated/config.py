@@ -92,6 +92,9 @@ class FLConfig:
     # the federated twin of centralised training's early stopping on its validation parts
     keep_round: Literal["best", "last"] = "last"
     mirror: bool = False  # mirroring on the drones; no gain measured (docs/federated.md)
+    # moving gestures' clips start with at most half a window of opening rest, as in
+    # centralised training (gesture/idle.py): windows of rest carry no gesture
+    trim_idle: bool = True
     # local epochs on capture-noised, One-Euro-smoothed windows (gesture/robust.py; the
     # partitions carry no history, so without the frame-rate and loss effects), or "none"
     augment: Literal["none", "capture"] = "capture"

@@ -3,7 +3,9 @@
 Both come from the centralised code (`proxima.gesture`): clips, the temporal split, the
 validation tail of each training part, and 60-frame windows. Only the training parts
 (the first 70% of every clip, minus a one-window gap) are ever shared out to drones; the
-last 30% is the held-out test set, which no drone trains on.
+last 30% is the held-out test set, which no drone trains on. As in centralised training,
+moving gestures' training parts start with at most half a window of the clip's opening
+rest (`trim-idle`, gesture/idle.py).
 
 Partitions (the run config's `partition`):
 - `view`: drone i holds the clips of camera view f, l, r (i mod 3): three drones seeing
@@ -32,6 +34,7 @@ import numpy as np
 
 from proxima.federated.config import FLConfig, view_of
 from proxima.gesture.clip import Clip
+from proxima.gesture.idle import trim_idle
 from proxima.gesture.windows import (
     WINDOW,
     Windows,
@@ -155,7 +158,7 @@ def partition_windows(
 ) -> tuple[Windows, Windows]:
     """(fit, validation) windows of one drone's partition of the training parts."""
     parts = split_clips(clips, "temporal", WINDOW)  # the protocol's gaps
-    train = parts.train
+    train = [trim_idle(c, cfg.window) for c in parts.train] if cfg.trim_idle else parts.train
     if cfg.partition == "view":
         view = view_of(partition_id)
         train = [c for c in train if c.view == view]

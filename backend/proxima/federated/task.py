@@ -53,7 +53,7 @@ def start_model(cfg: FLConfig) -> tuple[nn.Module, Pipeline]:
     from proxima.gesture.workflow import start_checkpoint
 
     try:
-        start = start_checkpoint(cfg.init, cfg.model, cfg.pipeline, cfg.window)
+        start = start_checkpoint(cfg.init, cfg.model, cfg.pipeline)
     except (OSError, ValueError) as exc:
         raise ConfigError(f"run config 'init': {exc}") from None
     set_weights(model, get_weights(start.model))

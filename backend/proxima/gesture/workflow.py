@@ -154,7 +154,7 @@ def train_model(
     win = cfg.window
     start = None
     if init is not None and not calibrating:
-        start = start_checkpoint(init, model_name, pipeline_name, win)
+        start = start_checkpoint(init, model_name, pipeline_name)
     data = load_data(data_specs)
     init_clf = load_init(init, split, model_name, win) if init is not None and calibrating else None
     parts = split_clips(data.clips, split, WINDOW, data.uav_dir)  # the protocol's gaps
@@ -242,13 +242,16 @@ def train_model(
 
 
 def start_checkpoint(
-    path: str | Path, model_name: str, pipeline_name: str | None, window: int = WINDOW
+    path: str | Path, model_name: str, pipeline_name: str | None
 ) -> GestureClassifier:
     """The checkpoint a run starts from (`--init`, and federated runs' `init`), checked to
-    be the same model, pipeline and window.
+    be the same model and pipeline. Its window may differ from the run's: neither model's
+    weights depend on the window's length (the TCN pools over time, the LSTM reads its
+    last step), so the 60-frame synthetic start serves 30-frame runs too (measured in
+    docs/experiments.md, twenty-second session).
 
     Raises:
-        FileNotFoundError, ValueError: not a checkpoint, or another model, pipeline or window.
+        FileNotFoundError, ValueError: not a checkpoint, or another model or pipeline.
     """
     start = GestureClassifier.load(path)
     wanted = pipeline_name or DEFAULT_PIPELINE[model_name]
@@ -257,6 +260,4 @@ def start_checkpoint(
             f"{path}: --init is a {start.model_name} model with the {start.pipeline.name!r} "
             f"pipeline, but this run trains {model_name} with {wanted!r}"
         )
-    if start.window != window:
-        raise ValueError(f"{path}: --init has {start.window}-frame windows, not {window}")
     return start
