@@ -44,7 +44,11 @@ VIEWS = "flr"  # decision_streams deals the views f, l, r in turn
 
 
 def cache_path(checkpoint: str, args: argparse.Namespace) -> Path:
-    return args.cache_dir / f"recs-{Path(checkpoint).stem}.pkl"
+    """`recs-<stem>.pkl` for the default streams; other stream options name their own
+    file, so a cache is never read for streams it does not hold."""
+    sizes = (args.tune_streams, args.streams, args.segments)
+    tail = "" if sizes == (6, 12, 30) else "-t{}-e{}-g{}".format(*sizes)
+    return args.cache_dir / f"recs-{Path(checkpoint).stem}{tail}.pkl"
 
 
 def headline(streams: list, recs: list, control: ControlSettings) -> dict[str, Any]:

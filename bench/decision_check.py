@@ -1,0 +1,92 @@
+"""A tuned decision setting checked on more held-out hours than it was chosen with: the
+shipped defaults (`ControlSettings()`), `bench.evidence_retune`'s grid selection and its
+per-command table (`--by-command`), each replayed on `--streams` evaluation streams per
+seed and condition (from seed 1000, so the first 12 are `bench.window_length`'s), clean
+and `field` 1. Wrong commands come a few per hour, so a difference needs hours: 48
+streams are 2 h per condition and seed, 12 h over three seeds.
+
+    python -m bench.decision_check --model runs/window/w30-s0.pt,runs/window/w30-s1.pt,\
+runs/window/w30-s2.pt --retune bench/results/evidence_retune-t24.json --streams 48 \
+        --out bench/results/decision_check.json
+
+Recognitions are cached as `bench.window_length` caches them (`recs-<stem>-t0-e48-g30.pkl`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from bench.evidence_retune import control_for
+from bench.robust_training import log, write_doc
+from bench.window_length import add_stream_args, held_out_sets, mean_headline, score_rule
+from proxima.control import ControlSettings
+from proxima.evaluation.latency import evaluate_config
+from proxima.evaluation.robust_training import pool
+
+
+def settings_of(retune: dict[str, Any]) -> dict[str, ControlSettings]:
+    """The defaults and the settings a `bench.evidence_retune` result selected."""
+    out = {"defaults": ControlSettings()}
+    selected = control_for(retune["selected"]["setting"])
+    out["selected"] = selected
+    if "by_command" in retune:
+        table = retune["by_command"]["table"]
+        out["by_command"] = selected.model_copy(update={"evidence_threshold_by_command": table})
+    return out
+
+
+def check(sets: list[tuple], control: ControlSettings) -> dict[str, Any]:
+    """Per condition: the seeds' mean headline figures, and the wrong and repeated
+    commands of all seeds' streams pooled (with the hours they came in)."""
+    per_seed = [score_rule(es, control, None) for _, es in sets]
+    out: dict[str, Any] = {}
+    for cond in ("clean", "field1"):
+        summaries = [evaluate_config(s, r, control) for _, es in sets for s, r in [es[cond]]]
+        pooled = pool(summaries)
+        hours = sum(s["stream_hours"] for s in summaries)
+        wrong_pairs: dict[str, int] = {}
+        for s in summaries:
+            for pair, n in s["wrong_by_pair"].items():
+                wrong_pairs[pair] = wrong_pairs.get(pair, 0) + n
+        out[cond] = {
+            "mean": mean_headline([p[cond] for p in per_seed]),
+            "hours": round(hours, 2),
+            "wrong": pooled["wrong"],
+            "repeats": pooled["repeats"],
+            "wrong_or_spurious_per_hour": pooled["wrong_or_spurious_per_hour"],
+            "wrong_by_pair": dict(sorted(wrong_pairs.items(), key=lambda kv: -kv[1])),
+        }
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--model", required=True, help="CKPT,CKPT,...: the held-out seeds")
+    ap.add_argument("--retune", type=Path, required=True, help="bench.evidence_retune's JSON")
+    add_stream_args(ap)
+    ap.add_argument("--out", type=Path, default=Path("bench/results/decision_check.json"))
+    ap.set_defaults(tune_streams=0, streams=48)
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    t0 = time.perf_counter()
+    checkpoints = args.model.split(",")
+    sets = held_out_sets(checkpoints, args)
+    retune = json.loads(args.retune.read_text())["result"]
+    result: dict[str, Any] = {"checkpoints": checkpoints, "streams": args.streams}
+    for name, control in settings_of(retune).items():
+        result[name] = {"setting": control.model_dump(), **check(sets, control)}
+        row = result[name]
+        log(f"{name}: {json.dumps({c: row[c]['mean'] for c in ('clean', 'field1')})}")
+        rates = [row[c]["wrong_or_spurious_per_hour"] for c in ("clean", "field1")]
+        log(f"  wrong or repeated per hour: clean {rates[0]}, field {rates[1]}")
+    write_doc(args.out, "decision_check", "decision_check", result, t0)
+
+
+if __name__ == "__main__":
+    main()
