@@ -1,5 +1,6 @@
 """A tuned decision setting checked on more held-out hours than it was chosen with: the
-shipped defaults (`ControlSettings()`), `bench.evidence_retune`'s grid selection and its
+shipped defaults (`ControlSettings()`), the single threshold before them,
+`bench.evidence_retune`'s grid selection and its
 per-command table (`--by-command`), each replayed on `--streams` evaluation streams per
 seed and condition (from seed 1000, so the first 12 are `bench.window_length`'s), clean
 and `field` 1. Wrong commands come a few per hour, so a difference needs hours: 48
@@ -29,10 +30,18 @@ from proxima.control import ControlSettings
 from proxima.evaluation.latency import evaluate_config
 from proxima.evaluation.robust_training import pool
 
+# The evidence rule's single-threshold defaults of 2026-12-05's morning
+SINGLE_THRESHOLD = ControlSettings(
+    evidence_threshold=16.0,
+    evidence_half_life_s=1.0,
+    evidence_threshold_by_command={"have_command": 12.0},
+)
+
 
 def settings_of(retune: dict[str, Any]) -> dict[str, ControlSettings]:
-    """The defaults and the settings a `bench.evidence_retune` result selected."""
-    out = {"defaults": ControlSettings()}
+    """The defaults, the single threshold before them, and the settings a
+    `bench.evidence_retune` result selected."""
+    out = {"defaults": ControlSettings(), "single_threshold": SINGLE_THRESHOLD}
     selected = control_for(retune["selected"]["setting"])
     out["selected"] = selected
     if "by_command" in retune:

@@ -95,9 +95,10 @@ def recognised_streams(checkpoint: str, args: argparse.Namespace, cache: Path | 
     tune_sets, eval_sets = {}, {}
     for key, model in {"clean": condition("clean"), "field1": condition("field", 1)}.items():
         t0 = time.perf_counter()
-        s = decision_streams(clips, range(args.tune_streams), args.segments, model)
+        whole = getattr(args, "whole_stream_capture", False)
+        s = decision_streams(clips, range(args.tune_streams), args.segments, model, whole)
         tune_sets[key] = (s, recognitions(s, clf, settings))
-        s = decision_streams(clips, range(1000, 1000 + args.streams), args.segments, model)
+        s = decision_streams(clips, range(1000, 1000 + args.streams), args.segments, model, whole)
         eval_sets[key] = (s, recognitions(s, clf, settings))
         log(f"{key}: streams recognised in {time.perf_counter() - t0:.0f} s")
     if cache is not None:

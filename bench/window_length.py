@@ -48,6 +48,7 @@ def cache_path(checkpoint: str, args: argparse.Namespace) -> Path:
     file, so a cache is never read for streams it does not hold."""
     sizes = (args.tune_streams, args.streams, args.segments)
     tail = "" if sizes == (6, 12, 30) else "-t{}-e{}-g{}".format(*sizes)
+    tail += "-whole" if args.whole_stream_capture else ""
     return args.cache_dir / f"recs-{Path(checkpoint).stem}{tail}.pkl"
 
 
@@ -120,6 +121,10 @@ def add_stream_args(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--tune-streams", type=int, default=6)
     ap.add_argument("--segments", type=int, default=30)
     ap.add_argument("--cache-dir", type=Path, default=Path("runs/window"))
+    ap.add_argument("--whole-stream-capture", action="store_true",
+                    help="capture each stitched stream in one draw at the drawn frame rate "
+                    "(15-30 fps under field), as proxima robustness does; default: each "
+                    "clip at 30 fps")  # fmt: skip
 
 
 def held_out_sets(checkpoints: list[str], args: argparse.Namespace) -> list[tuple]:

@@ -37,3 +37,18 @@ def test_per_command_thresholds_never_rank_below_the_shared_one(laser_clips) -> 
     chosen = base.model_copy(update={"evidence_threshold_by_command": table})
     again = pool([evaluate_config(s, r, chosen) for s, r in sets])
     assert again["wrong"] == best["wrong"] and again["hit_rate"] == best["hit_rate"]
+
+
+def test_whole_stream_capture_keeps_the_script_at_the_drawn_frame_rate(laser_clips) -> None:
+    """`whole_stream`: the same script of gestures, stitched from the clips as recorded
+    and captured in one draw as `proxima robustness` captures its live streams: below
+    30 fps under `field`."""
+    model = condition("field", 1)
+    per_clip = decision_streams(laser_clips, [3, 4], 4, model)
+    whole = decision_streams(laser_clips, [3, 4], 4, model, whole_stream=True)
+    for a, b in zip(per_clip, whole, strict=True):
+        assert a.view == b.view and a.fps == 30.0 and 15.0 <= b.fps <= 30.0
+        assert [g.gesture for g in a.segments] == [g.gesture for g in b.segments]
+        last = b.segments[-1].end_t
+        assert abs((b.frames[-1] - 1) / b.fps - last) < 1.0  # the script's times kept
+    assert any(b.fps < 30.0 for b in whole)

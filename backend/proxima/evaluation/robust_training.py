@@ -100,14 +100,26 @@ def decision_streams(
     seeds: Sequence[int],
     segments: int,
     model: CaptureModel,
+    whole_stream: bool = False,
 ) -> list[StitchedStream]:
     """One stitched held-out stream per seed (views f, l, r in turn), its clips captured
-    under `model` with that seed first."""
+    under `model` with that seed first, at 30 fps; with `whole_stream`, the stream
+    stitched from the clips as recorded and then captured in one draw at the drawn frame
+    rate (15-30 fps under `field`), as `proxima robustness`'s live check does: the
+    evidence rule weighs a recognition by the seconds it stands for, so a setting tuned
+    at 30 fps alone has not met the coarser steps of a slower camera."""
+    from proxima.evaluation.robustness import captured_stream
+
     out = []
     for k, seed in enumerate(seeds):
         view = VIEWS[k % len(VIEWS)]
-        source = captured_clips([c for c in clips if c.view == view], model, seed)
+        own = [c for c in clips if c.view == view]
         plan = random_plan(np.random.default_rng(seed), segments, 3.0, 6.0)
+        if whole_stream:
+            stream = stitch_views(own, plan, (view,), "test", 0.5, 30.0, None, seed)[view]
+            out.append(captured_stream(stream, model, np.random.default_rng(seed)))
+            continue
+        source = captured_clips(own, model, seed)
         out.append(stitch_views(source, plan, (view,), "test", 0.5, 30.0, None, seed)[view])
     return out
 
