@@ -7,10 +7,13 @@ and `field` 1. Wrong commands come a few per hour, so a difference needs hours: 
 streams are 2 h per condition and seed, 12 h over three seeds.
 
     python -m bench.decision_check --model runs/window/w30-s0.pt,runs/window/w30-s1.pt,\
-runs/window/w30-s2.pt --retune bench/results/evidence_retune-t24.json --streams 48 \
-        --out bench/results/decision_check.json
+runs/window/w30-s2.pt --retune bench/results/evidence_retune-t24-whole.json --streams 48 \
+        --whole-stream-capture --out bench/results/decision_check-whole.json
 
-Recognitions are cached as `bench.window_length` caches them (`recs-<stem>-t0-e48-g30.pkl`).
+`--whole-stream-capture` captures each stream in one draw at 15-30 fps, as `proxima
+robustness` does (the shipped defaults were chosen so); without it, clip by clip at 30
+fps (`bench/results/decision_check.json`). Recognitions are cached as
+`bench.window_length` caches them (`recs-<stem>-t0-e48-g30[-whole].pkl`).
 """
 
 from __future__ import annotations

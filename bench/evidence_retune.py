@@ -11,7 +11,10 @@ The caches are `bench.window_length`'s (made there if missing). `--by-command` t
 tunes every command's own threshold on top of the selected setting (`tune_by_command`,
 the tuning streams pooled) and reports that too; with `--tune-streams 24` (1 h of tuning
 streams per condition and seed, 6 h pooled) a wrong command in the tuning pool is one in
-six hours, not one in 1.5.
+six hours, not one in 1.5. `--whole-stream-capture` captures every stream in one draw at
+15-30 fps, as `proxima robustness` does; the shipped defaults come from that run
+(`--tune-streams 24 --whole-stream-capture --by-command --out
+bench/results/evidence_retune-t24-whole.json`).
 """
 
 from __future__ import annotations
