@@ -15,14 +15,11 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import time
 from pathlib import Path
 from typing import Any
 
-import torch
-
 from bench.robust_training import log, write_doc
-from bench.window_length import add_stream_args, held_out_sets, score_setting
+from bench.window_length import held_out_start, score_setting
 from proxima.control import ControlSettings
 
 SHARED: dict[str, Any] = {
@@ -36,14 +33,7 @@ GRID = {"have_command": [16.0, 12.0, 10.0, 8.0, 6.0], "wave_off": [16.0, 12.0, 8
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--model", required=True, help="CKPT,CKPT,...: the held-out seeds")
-    add_stream_args(ap)
-    ap.add_argument("--out", type=Path, default=Path("bench/results/arming_threshold.json"))
-    args = ap.parse_args()
-    torch.set_num_threads(1)
-    t0 = time.perf_counter()
-    checkpoints = args.model.split(",")
-    sets = held_out_sets(checkpoints, args)
+    args, checkpoints, sets, t0 = held_out_start(ap, Path("bench/results/arming_threshold.json"))
     rows: list[dict[str, Any]] = []
     for values in itertools.product(*GRID.values()):
         table = {

@@ -20,15 +20,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
-import torch
-
 from bench.evidence_retune import control_for
 from bench.robust_training import log, write_doc
-from bench.window_length import add_stream_args, held_out_sets, mean_headline, score_rule
+from bench.window_length import headline_of, held_out_start, mean_headline
 from proxima.control import ControlSettings
 from proxima.evaluation.latency import evaluate_config
 from proxima.evaluation.robust_training import pool
@@ -56,39 +54,27 @@ def settings_of(retune: dict[str, Any]) -> dict[str, ControlSettings]:
 def check(sets: list[tuple], control: ControlSettings) -> dict[str, Any]:
     """Per condition: the seeds' mean headline figures, and the wrong and repeated
     commands of all seeds' streams pooled (with the hours they came in)."""
-    per_seed = [score_rule(es, control, None) for _, es in sets]
     out: dict[str, Any] = {}
     for cond in ("clean", "field1"):
-        summaries = [evaluate_config(s, r, control) for _, es in sets for s, r in [es[cond]]]
+        summaries = [evaluate_config(*es[cond], control) for _, es in sets]  # one per seed
         pooled = pool(summaries)
-        hours = sum(s["stream_hours"] for s in summaries)
-        wrong_pairs: dict[str, int] = {}
-        for s in summaries:
-            for pair, n in s["wrong_by_pair"].items():
-                wrong_pairs[pair] = wrong_pairs.get(pair, 0) + n
+        pairs = sum((Counter(s["wrong_by_pair"]) for s in summaries), Counter())
         out[cond] = {
-            "mean": mean_headline([p[cond] for p in per_seed]),
-            "hours": round(hours, 2),
+            "mean": mean_headline([headline_of(s) for s in summaries]),
+            "hours": round(sum(s["stream_hours"] for s in summaries), 2),
             "wrong": pooled["wrong"],
             "repeats": pooled["repeats"],
             "wrong_or_spurious_per_hour": pooled["wrong_or_spurious_per_hour"],
-            "wrong_by_pair": dict(sorted(wrong_pairs.items(), key=lambda kv: -kv[1])),
+            "wrong_by_pair": dict(pairs.most_common()),
         }
     return out
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--model", required=True, help="CKPT,CKPT,...: the held-out seeds")
     ap.add_argument("--retune", type=Path, required=True, help="bench.evidence_retune's JSON")
-    add_stream_args(ap)
-    ap.add_argument("--out", type=Path, default=Path("bench/results/decision_check.json"))
-    ap.set_defaults(tune_streams=0, streams=48)
-    args = ap.parse_args()
-    torch.set_num_threads(1)
-    t0 = time.perf_counter()
-    checkpoints = args.model.split(",")
-    sets = held_out_sets(checkpoints, args)
+    out = Path("bench/results/decision_check.json")
+    args, checkpoints, sets, t0 = held_out_start(ap, out, tune_streams=0, streams=48)
     retune = json.loads(args.retune.read_text())["result"]
     result: dict[str, Any] = {"checkpoints": checkpoints, "streams": args.streams}
     for name, control in settings_of(retune).items():

@@ -21,13 +21,10 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import time
 from pathlib import Path
 
-import torch
-
 from bench.robust_training import log, write_doc
-from bench.window_length import add_stream_args, held_out_sets, score_setting
+from bench.window_length import held_out_start, score_setting
 from proxima.control import ControlSettings
 from proxima.evaluation.robust_training import tune_by_command
 
@@ -55,16 +52,9 @@ def control_for(values: dict[str, float]) -> ControlSettings:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--model", required=True, help="CKPT,CKPT,...: the held-out seeds")
-    add_stream_args(ap)
     ap.add_argument("--by-command", action="store_true",
                     help="then tune each command's threshold on top of the selection")  # fmt: skip
-    ap.add_argument("--out", type=Path, default=Path("bench/results/evidence_retune.json"))
-    args = ap.parse_args()
-    torch.set_num_threads(1)
-    t0 = time.perf_counter()
-    checkpoints = args.model.split(",")
-    sets = held_out_sets(checkpoints, args)
+    args, checkpoints, sets, t0 = held_out_start(ap, Path("bench/results/evidence_retune.json"))
     rows = []
     for n, values in enumerate(itertools.product(*GRID.values()), 1):
         setting = dict(zip(GRID, values, strict=True))

@@ -93,9 +93,9 @@ def recognised_streams(checkpoint: str, args: argparse.Namespace, cache: Path | 
     clf = load_classifier(checkpoint)  # comma-joined: their ensemble
     settings = EngineSettings()
     tune_sets, eval_sets = {}, {}
+    whole = getattr(args, "whole_stream_capture", False)  # `streams` has no such option
     for key, model in {"clean": condition("clean"), "field1": condition("field", 1)}.items():
         t0 = time.perf_counter()
-        whole = getattr(args, "whole_stream_capture", False)
         s = decision_streams(clips, range(args.tune_streams), args.segments, model, whole)
         tune_sets[key] = (s, recognitions(s, clf, settings))
         s = decision_streams(clips, range(1000, 1000 + args.streams), args.segments, model, whole)

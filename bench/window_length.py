@@ -52,9 +52,14 @@ def cache_path(checkpoint: str, args: argparse.Namespace) -> Path:
     return args.cache_dir / f"recs-{Path(checkpoint).stem}{tail}.pkl"
 
 
-def headline(streams: list, recs: list, control: ControlSettings) -> dict[str, Any]:
-    row = summary_row(evaluate_config(streams, recs, control))
+def headline_of(summary: dict[str, Any]) -> dict[str, Any]:
+    """The headline figures of one score summary (`latency.evaluate_config`)."""
+    row = summary_row(summary)
     return {k: row[k] for k in HEADLINE}
+
+
+def headline(streams: list, recs: list, control: ControlSettings) -> dict[str, Any]:
+    return headline_of(evaluate_config(streams, recs, control))
 
 
 def score_rule(eval_sets: dict, control: ControlSettings, temperature: float | None) -> dict:
@@ -130,6 +135,24 @@ def add_stream_args(ap: argparse.ArgumentParser) -> None:
 def held_out_sets(checkpoints: list[str], args: argparse.Namespace) -> list[tuple]:
     """Each checkpoint's (tuning, evaluation) recognised streams, cached."""
     return [recognised_streams(c, args, cache_path(c, args)) for c in checkpoints]
+
+
+def held_out_start(
+    ap: argparse.ArgumentParser, out: Path, **defaults: Any
+) -> tuple[argparse.Namespace, list[str], list[tuple], float]:
+    """The start the benchmarks over the held-out seeds share: `--model CKPT,CKPT,...`,
+    the stream options (`defaults` overrides theirs) and `--out` parsed after `ap`'s
+    own options, one torch thread, and each seed's cached (tuning, evaluation) sets.
+    Returns (args, checkpoints, sets, start time)."""
+    ap.add_argument("--model", required=True, help="CKPT,CKPT,...: the held-out seeds")
+    add_stream_args(ap)
+    ap.add_argument("--out", type=Path, default=out)
+    ap.set_defaults(**defaults)  # after the options: argparse keeps an option's own default
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    t0 = time.perf_counter()
+    checkpoints = args.model.split(",")
+    return args, checkpoints, held_out_sets(checkpoints, args), t0
 
 
 TUNING_KEYS = ("hit_rate", "on_time_rate", "wrong_or_spurious_per_hour")

@@ -122,7 +122,7 @@ def test_a_thumb_gesture_counts_only_windows_that_see_the_hand() -> None:
 
 def test_evidence_accrues_per_stream_second_whatever_the_frame_rate() -> None:
     # Stride 5 at 30 fps recognises every 1/6 s, at 15 fps every 1/3 s: the same
-    # confident gesture fires at about the same stream time, at the shipped 16 nats too.
+    # confident gesture fires at about the same stream time, at 16 nats as well.
     labels = ("a", "b", "c")
     p = np.array([0.9, 0.05, 0.05])  # 2.2 nats per 1/6 s
     fired = {}

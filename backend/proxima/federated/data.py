@@ -158,10 +158,12 @@ def partition_windows(
 ) -> tuple[Windows, Windows]:
     """(fit, validation) windows of one drone's partition of the training parts."""
     parts = split_clips(clips, "temporal", WINDOW)  # the protocol's gaps
-    train = [trim_idle(c, cfg.window) for c in parts.train] if cfg.trim_idle else parts.train
+    train = parts.train
     if cfg.partition == "view":
         view = view_of(partition_id)
         train = [c for c in train if c.view == view]
+    if cfg.trim_idle:
+        train = [trim_idle(c, cfg.window) for c in train]
     fit_parts, val_parts = validation_parts(train, cfg.window)
     names: list[str] = []
     fit = make_windows(fit_parts, cfg.window, cfg.stride, cfg.max_gap, names)
