@@ -21,6 +21,8 @@ ROOT = Path(__file__).resolve().parent
 SHIPPED_FILES = (
     "models/gesture-default.pt",
     "models/gesture-default.md",
+    "models/synth-only-1560.pt",
+    "models/synth-only-1560.md",
     "config/demo.toml",
     "config/demo-sim.toml",
     "config/scenes/demo.toml",

@@ -155,6 +155,7 @@ def test_the_wheel_carries_the_shipped_files(installed: Installed) -> None:
     shipped = {
         "proxima/_shipped/models/gesture-default.pt",
         "proxima/_shipped/models/gesture-default.md",
+        "proxima/_shipped/models/synth-only-1560.pt",
         "proxima/_shipped/config/demo.toml",
         "proxima/_shipped/config/demo-sim.toml",
         "proxima/_shipped/config/scenes/demo.toml",
@@ -177,7 +178,7 @@ def test_the_wheel_carries_the_shipped_files(installed: Installed) -> None:
         "print(s.checkout_root())\n"
         "assert len(Settings.load(DEFAULT_CONFIG).drones) == 3  # the demo's settings load\n"
         "for p in (proxima.__file__, default_checkpoint(), DEFAULT_CONFIG,\n"
-        "          Settings().static_dir() / 'index.html'):\n"
+        "          Settings().static_dir() / 'index.html', Settings().training.start_path()):\n"
         "    print(p)\n"
     )
     out = subprocess.run(

@@ -1,6 +1,6 @@
 """Files that ship with Proxima beside its code: the default gesture model and its card,
-the demo's settings (and the closed-loop demo's, with its scene) and the built console
-(`static/`).
+the synthetic start of federated runs, the demo's settings (and the closed-loop demo's,
+with its scene) and the built console (`static/`).
 
 In a checkout they lie at the repository root (`models/`, `config/`, `static/`); the
 wheel carries copies inside the package (`proxima/_shipped/`, written by `setup.py`'s
@@ -20,6 +20,8 @@ PACKAGED_DIR = _PACKAGE / "_shipped"
 _REPO = _PACKAGE.parents[1]  # backend/proxima -> the repository root, in a checkout
 
 DEFAULT_CHECKPOINT = "models/gesture-default.pt"
+# the synthetic operator's model console federated runs start from (`[training] start`)
+FEDERATED_START = "models/synth-only-1560.pt"
 DEMO_CONFIG = "config/demo.toml"
 SIM_DEMO_CONFIG = "config/demo-sim.toml"  # `proxima demo --sim`
 STATIC_DIR = "static"

@@ -1,6 +1,7 @@
 """The Training page: a supervisor starts a federated run on Flower's deployment engine
 (a local SuperLink and one SuperNode per drone, real processes on 127.0.0.1) and sees
-its curve points appear; a viewer who tries the same gets 403."""
+its curve points appear, the run starting from the synthetic operator's model; a viewer
+who tries the same gets 403."""
 
 from __future__ import annotations
 
@@ -42,6 +43,9 @@ def test_start_a_run_and_see_curve_points(page, tmp_path: Path) -> None:  # type
         )
         run = console.runtime.training.get_run(run_id)
         assert run["status"] == "completed" and [r["round"] for r in run["rounds"]] == [0, 1]
+        # The console's runs start from the synthetic operator's model (`[training] start`):
+        # round 0 already names most held-out windows (a fresh model: about 0.08).
+        assert run["rounds"][0]["global_accuracy"] > 0.5, run["rounds"][0]
         # The runs table shows how long the run took (m:ss), as the store timed it.
         cell = f"table.runs tr[data-run='{run_id}'] td.duration"
         page.wait_for_function(
@@ -68,7 +72,7 @@ def test_viewer_gets_403_on_starting_a_run(page, tmp_path: Path) -> None:  # typ
         )
         assert attrs == {
             "rounds": ["1", "500", "1", "5"],
-            "local_epochs": ["1", "100", "1", "1"],
+            "local_epochs": ["1", "100", "1", "20"],  # the console's recipe ([training])
             "batch_size": ["1", "4096", "1", "64"],
             "learning_rate": ["0.000001", "1", "any", "0.002"],
             "fraction_fit": ["0", "1", "any", "1"],
@@ -78,6 +82,9 @@ def test_viewer_gets_403_on_starting_a_run(page, tmp_path: Path) -> None:  # typ
             "form.start-run select[name=strategy] option", "els => els.map(e => e.value)"
         )
         assert strategies == ["fedavg", "fedprox", "fedadam", "fedavgm", "scaffold"]
+        assert page.eval_on_selector("form.start-run select[name=strategy]", "e => e.value") == (
+            "scaffold"
+        )
         assert page.is_checked("form.start-run input[name=include_samples]")
         with page.expect_response(
             lambda r: r.url.endswith("/api/training/runs") and r.request.method == "POST"

@@ -245,13 +245,13 @@ def build_runtime(
 
     if training if training is not None else settings.training.enabled:
         try:
-            from proxima.federated.config import FLConfig
             from proxima.federated.runner import FederatedRunner
 
             # Runs train models the live engine can take: its window length by default.
-            defaults = None
+            window: dict[str, int] = {}
             if rt.engine is not None:
-                defaults = FLConfig(window=rt.engine.classifier(rt.engine.specs[0].name).window)
+                window = {"window": rt.engine.classifier(rt.engine.specs[0].name).window}
+            defaults = settings.training.run_config(**window)
             rt.training = FederatedRunner(
                 settings.server.db_path,
                 settings.server.models_dir,
