@@ -48,3 +48,17 @@ def test_bad_run_defaults_are_refused_when_the_settings_load(
         Settings.load(path)
     msg = str(err.value)
     assert str(path) in msg and "training" in msg and named in msg, msg
+
+
+def test_a_missing_shipped_start_is_named_when_a_run_needs_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The settings still load (the console starts; build_runtime notes the runner as
+    # unavailable with this message), so a missing start never keeps the console down.
+    import proxima.federated.settings as training
+
+    monkeypatch.setattr(training, "FEDERATED_START", "models/no-such-start.pt")
+    settings = TrainingSettings()
+    with pytest.raises(ValueError, match=r"shipped synthetic start is missing .*no-such-start"):
+        settings.run_config()
+    assert TrainingSettings(start="none").run_config().init == ""

@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import ipaddress
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-if TYPE_CHECKING:
-    from proxima.federated.config import FLConfig
+from proxima.federated.config import ConfigError, FLConfig
+from proxima.shipped import FEDERATED_START, shipped_path
 
 
 def split_address(address: str) -> tuple[str, int]:
@@ -142,7 +142,10 @@ class TrainingSettings(DeploymentSettings):
             raise ValueError("run_defaults: set the start model with `start`, not 'init'")
         if self.start not in ("synthetic", "none") and not Path(self.start).is_file():
             raise ValueError(f"start: no checkpoint at {self.start!r}")
-        self.run_config()  # a bad key or value fails here, named, not at the first run
+        try:  # a bad key or value fails here, named, not at the first run
+            FLConfig.from_run_config(self.run_defaults)
+        except ConfigError as exc:
+            raise ValueError(f"run_defaults: {exc}") from None
         return self
 
     def start_path(self) -> Path | None:
@@ -155,8 +158,6 @@ class TrainingSettings(DeploymentSettings):
             return None
         if self.start != "synthetic":
             return Path(self.start).resolve()
-        from proxima.shipped import FEDERATED_START, shipped_path
-
         path = shipped_path(FEDERATED_START)
         if not path.is_file():
             raise ValueError(f"start: the shipped synthetic start is missing ({path})")
@@ -169,8 +170,6 @@ class TrainingSettings(DeploymentSettings):
         Raises:
             ValueError: a bad key or value (named), or a missing start.
         """
-        from proxima.federated.config import ConfigError, FLConfig
-
         start = self.start_path()
         values = {**self.run_defaults, "init": str(start) if start else "", **overrides}
         try:
