@@ -28,6 +28,8 @@ def test_console_runs_start_from_the_synthetic_model_with_the_measured_recipe() 
     own = TrainingSettings(run_defaults={"local-epochs": 3}).run_config()
     assert (own.local_epochs, own.strategy) == (3, "fedavg")  # the rest: FLConfig's own
     assert RUN_DEFAULTS["local-epochs"] == 20  # the table in docs/federated.md
+    with pytest.raises(ValueError, match="'window'"):  # the live model's length, checked
+        TrainingSettings().run_config(window=5)
 
 
 @pytest.mark.parametrize(

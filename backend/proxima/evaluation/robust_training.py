@@ -115,12 +115,11 @@ def decision_streams(
         view = VIEWS[k % len(VIEWS)]
         own = [c for c in clips if c.view == view]
         plan = random_plan(np.random.default_rng(seed), segments, 3.0, 6.0)
+        source = own if whole_stream else captured_clips(own, model, seed)
+        stream = stitch_views(source, plan, (view,), "test", 0.5, 30.0, None, seed)[view]
         if whole_stream:
-            stream = stitch_views(own, plan, (view,), "test", 0.5, 30.0, None, seed)[view]
-            out.append(captured_stream(stream, model, np.random.default_rng(seed)))
-            continue
-        source = captured_clips(own, model, seed)
-        out.append(stitch_views(source, plan, (view,), "test", 0.5, 30.0, None, seed)[view])
+            stream = captured_stream(stream, model, np.random.default_rng(seed))
+        out.append(stream)
     return out
 
 

@@ -168,11 +168,9 @@ class TrainingSettings(DeploymentSettings):
         `init`, then `overrides` (e.g. the live model's `window`).
 
         Raises:
-            ValueError: a bad key or value (named), or a missing start.
+            ValueError: a missing start; ConfigError (a ValueError): a bad override, named
+                (`run_defaults` were checked when the settings loaded).
         """
         start = self.start_path()
         values = {**self.run_defaults, "init": str(start) if start else "", **overrides}
-        try:
-            return FLConfig.from_run_config(values)
-        except ConfigError as exc:
-            raise ValueError(f"run_defaults: {exc}") from None
+        return FLConfig.from_run_config(values)
