@@ -170,6 +170,8 @@ def main() -> None:
     ap.add_argument("--window", type=int, default=None, help="frames per window of both runs "
                     "(default: FLConfig's)")  # fmt: skip
     ap.add_argument("--keep-central", type=Path, help="save the centralised checkpoint here")
+    ap.add_argument("--central-only", action="store_true",
+                    help="only the centralised reference (more seeds of it)")  # fmt: skip
     ap.add_argument("--out", type=Path, default=OUT, help="results JSON; the curve beside it")
     args = ap.parse_args()
 
@@ -203,6 +205,11 @@ def main() -> None:
                           args.keep_central, args.seed, base.window)  # fmt: skip
     results["centralised"] = central
     print("centralised", central["accuracy"], flush=True)
+    if args.central_only:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(results, indent=1))
+        print(f"-> {args.out}")
+        return
     sim, _ = simulation(base, f"{args.rounds} rounds x 3 drones")
     results["simulation_5_rounds"] = sim
     print("simulation", sim["wall_s"], sim["final_accuracy"], flush=True)

@@ -91,6 +91,39 @@ def test_windows_without_history_lose_only_the_timing_effects(parts) -> None:
     assert condition("field", 1).timing
 
 
+def test_the_time_clock_keeps_a_slow_cameras_window_on_the_recordings_clock(parts) -> None:
+    # A 15 fps camera, nothing else (condition fps 2): its last 30 poses span 2 s, so the
+    # window under the pose clock runs the gesture twice as fast; resampled to 30 per
+    # second it stays near the recording's own last 30 rows (the live filter's lag and
+    # the interpolation between every other row apart).
+    w = make_windows(parts, 30, 8, 5)
+    mix = [("fps", 2, 1.0)]
+    src = CaptureSource.from_parts(parts, 30, 8, 5, history_rows(mix, 30))
+    by_poses = capture_windows(w, src, mix, np.random.default_rng(0), 30)
+    by_time = capture_windows(w, src, mix, np.random.default_rng(0), 30, clock="time")
+    assert by_time.shape == by_poses.shape == w.xyz.shape
+    moving = np.abs(np.diff(w.xyz, axis=1)).mean(axis=(1, 2, 3)) > 2e-3
+    assert moving.sum() >= 10
+    off_time = np.abs(by_time - w.xyz)[moving].mean()
+    off_poses = np.abs(by_poses - w.xyz)[moving].mean()
+    assert off_time < 0.2 * off_poses  # measured 0.0028 against 0.045
+    # the training mix (three conditions): every window drawn, each clock
+    full = CaptureSource.from_parts(parts, 30, 8, 5, history_rows(CAPTURE_MIX, 30))
+    for clock in ("time", "mixed"):
+        out = capture_windows(w, full, CAPTURE_MIX, np.random.default_rng(0), 30, clock=clock)
+        assert np.isfinite(out).all() and np.abs(out).max() < 10
+    # "mixed": each window one of the two (this condition draws no noise)
+    mixed = capture_windows(w, src, mix, np.random.default_rng(0), 30, clock="mixed")
+    as_time = np.all(np.isclose(mixed, by_time, atol=1e-6), axis=(1, 2, 3))
+    as_poses = np.all(np.isclose(mixed, by_poses, atol=1e-6), axis=(1, 2, 3))
+    assert np.all(as_time | as_poses) and 0.3 < as_time[moving].mean() < 0.7
+    # at 30 fps with nothing lost the two clocks give the same windows
+    clean = [("clean", 1, 1.0)]
+    a = capture_windows(w, src, clean, np.random.default_rng(0), 30)
+    b = capture_windows(w, src, clean, np.random.default_rng(0), 30, clock="time")
+    assert np.array_equal(a, b)
+
+
 def test_training_with_capture_runs_and_unknown_augment_is_refused(parts) -> None:
     from proxima.gesture.features import make_pipeline
     from proxima.gesture.geometry import to_metric
@@ -108,6 +141,8 @@ def test_training_with_capture_runs_and_unknown_augment_is_refused(parts) -> Non
     assert len(history) == 1 and np.isfinite(history[0].train_loss)
     with pytest.raises(ValueError, match="augment 'bogus'"):
         fit(model, pipeline, w, None, TrainConfig(epochs=1, augment="bogus"))
+    with pytest.raises(ValueError, match="window clock 'bogus'"):
+        fit(model, pipeline, w, None, TrainConfig(epochs=1, window_clock="bogus"))
 
 
 def test_temperature_is_fitted_on_held_out_windows_and_round_trips(

@@ -79,6 +79,14 @@ class EngineSettings(BaseModel):
         description="a pause between poses longer than this restarts the window "
         "(training windows never bridge more than 5 missing frames at 30 fps)",
     )
+    window_clock: Literal["model", "poses", "time"] = Field(
+        "model",
+        description="`poses`: the window holds the last N poses received, whatever their "
+        "times (a 15 fps camera's 30-pose window spans 2 s); `time`: the last (N - 1) / 30 s "
+        "resampled to N poses and classified every stride / 30 s (`proxima.engine.window`); "
+        "`model`: the clock the checkpoint's training windows had (`proxima train "
+        "--window-clock`; older checkpoints: poses)",
+    )
     smooth_replays: bool = Field(
         True,
         description="replayed landmark streams pass the One Euro filter the camera path's "

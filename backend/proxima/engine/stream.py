@@ -45,7 +45,7 @@ from proxima.control import (
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.fusion import window_evidence
 from proxima.engine.taps import StreamTaps
-from proxima.engine.window import PoseWindow
+from proxima.engine.window import PoseWindow, WindowClock
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
 from proxima.pose import PoseSmoother, operator_sight
 from proxima.types import Event, Frame, Pose
@@ -60,6 +60,11 @@ class Classifier(Protocol):
 
     window: int
     labels: tuple[str, ...]
+
+    @property
+    def window_clock(self) -> str:
+        """ "poses" or "time": how the model's training windows were timed."""
+        ...
 
     def predict(self, xyz: np.ndarray, aspect: float = ...) -> np.ndarray: ...
 
@@ -137,7 +142,7 @@ class StreamPipeline:
         self.publish = publish
         self.taps = taps if taps is not None else StreamTaps(spec.name)
         self._classifier = classifier
-        self.window = PoseWindow(classifier.window, self.settings.stride, self.settings.max_gap_s)
+        self.window = self._new_window(classifier)
         self.filter = decision_filter(self.control, classifier.labels)
         self.evidence = HandEvidence.from_settings(self.control)
         self._restarted = True  # the filter was emptied since the last window (fusion)
@@ -154,6 +159,16 @@ class StreamPipeline:
         self._swap: ClassifierSwap | None = None  # requested from any thread
         self._swap_guard = threading.Lock()
         self._closed = False
+
+    def _clock(self, classifier: Classifier) -> WindowClock:
+        clock = self.settings.window_clock
+        if clock == "model":
+            return "time" if classifier.window_clock == "time" else "poses"
+        return clock
+
+    def _new_window(self, classifier: Classifier) -> PoseWindow:
+        s = self.settings
+        return PoseWindow(classifier.window, s.stride, s.max_gap_s, clock=self._clock(classifier))
 
     @property
     def classifier(self) -> Classifier:
@@ -183,8 +198,8 @@ class StreamPipeline:
 
     def _install(self, swap: ClassifierSwap, t: float | None) -> None:
         clf = swap.classifier
-        if clf.window != self.window.size:
-            self.window = PoseWindow(clf.window, self.settings.stride, self.settings.max_gap_s)
+        if (clf.window, self._clock(clf)) != (self.window.size, self.window.clock):
+            self.window = self._new_window(clf)
         self.filter = decision_filter(self.control, clf.labels)
         self._classifier = clf
         self._restarted = True

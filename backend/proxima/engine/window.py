@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 from collections import deque
+from typing import Literal
 
 import numpy as np
 
+from proxima.gesture.timebase import RATE_HZ, resample_windows
 from proxima.types import Pose
+
+WindowClock = Literal["poses", "time"]
 
 
 class PoseWindow:
@@ -15,18 +19,44 @@ class PoseWindow:
     A pause longer than `max_gap_s` between poses (nobody detected, the operator changed)
     empties the window, as training windows never bridge long gaps. `due()` is true once
     the window is full and `stride` poses came since the last classification.
+
+    `clock="time"` keeps the window's span in seconds instead: the poses of the last
+    `(size - 1) / rate` seconds, resampled (linear interpolation) onto `size` instants
+    `1 / rate` apart that end at the newest pose. A 15 fps camera then fills a 30-frame
+    window in 1 s instead of 2, and the gesture moves at the speed the model trained on.
+    Classification is due every `stride / rate` seconds. At `rate` fps the two clocks
+    give the same windows at the same poses.
     """
 
-    def __init__(self, size: int = 60, stride: int = 5, max_gap_s: float = 0.25) -> None:
+    def __init__(
+        self,
+        size: int = 60,
+        stride: int = 5,
+        max_gap_s: float = 0.25,
+        clock: WindowClock = "poses",
+        rate: float = RATE_HZ,
+    ) -> None:
         if size < 1 or stride < 1:
             raise ValueError(f"window size and stride must be >= 1, got {size}, {stride}")
+        if clock not in ("poses", "time"):
+            raise ValueError(f"window clock must be 'poses' or 'time', got {clock!r}")
+        if not rate > 0:
+            raise ValueError(f"window rate must be > 0 Hz, got {rate}")
         self.size = size
         self.stride = stride
         self.max_gap_s = max_gap_s
-        self._xyz: deque[np.ndarray] = deque(maxlen=size)
-        self._vis: deque[np.ndarray] = deque(maxlen=size)
+        self.clock = clock
+        self.rate = float(rate)
+        self.span_s = (size - 1) / self.rate
+        # The time clock keeps poses until the span is covered; a camera faster than
+        # `rate` needs more than `size` of them.
+        keep = size if clock == "poses" else None
+        self._t: deque[float] = deque(maxlen=keep)
+        self._xyz: deque[np.ndarray] = deque(maxlen=keep)
+        self._vis: deque[np.ndarray] = deque(maxlen=keep)
         self._last_t: float | None = None
         self._since = 0  # poses since the last classification
+        self._taken_t: float | None = None  # stream time of the last classification
         self.restarts = 0
 
     def __len__(self) -> int:
@@ -34,10 +64,12 @@ class PoseWindow:
 
     def clear(self) -> None:
         """Forget every pose (the next classification waits for a full window)."""
+        self._t.clear()
         self._xyz.clear()
         self._vis.clear()
         self._last_t = None
         self._since = 0
+        self._taken_t = None
 
     def push(self, pose: Pose) -> bool:
         """Add the operator's pose; return True if a gap made the window restart."""
@@ -46,20 +78,47 @@ class PoseWindow:
             self.clear()
             self.restarts += 1
             restarted = True
+        self._t.append(pose.t)
         self._xyz.append(pose.xyz)
         self._vis.append(pose.visibility)
         self._last_t = pose.t
         self._since += 1
+        if self.clock == "time":
+            # keep one pose at or before the span's start, drop the older ones
+            start = pose.t - self.span_s + 1e-6
+            while len(self._t) >= 2 and self._t[1] <= start:
+                self._t.popleft()
+                self._xyz.popleft()
+                self._vis.popleft()
         return restarted
+
+    def full(self) -> bool:
+        """Whether the window holds its whole span."""
+        if self.clock == "poses":
+            return len(self._xyz) == self.size
+        return bool(self._t) and self._t[0] <= self._t[-1] - self.span_s + 1e-6
 
     def due(self) -> bool:
         """Whether to classify now."""
-        return len(self._xyz) == self.size and self._since >= self.stride
+        if not self.full():
+            return False
+        if self.clock == "poses" or self._taken_t is None:
+            return self._since >= self.stride
+        return self._t[-1] - self._taken_t >= self.stride / self.rate - 1e-6
 
     def take(self) -> tuple[np.ndarray, np.ndarray]:
         """The window as xyz (1, size, 33, 3) float32 and visibility (1, size, 33); marks
         it classified."""
         self._since = 0
-        xyz = np.stack(self._xyz).astype(np.float32, copy=False)[None]
-        vis = np.stack(self._vis).astype(np.float32, copy=False)[None]
-        return xyz, vis
+        self._taken_t = self._t[-1] if self._t else None
+        xyz = np.stack(self._xyz)
+        vis = np.stack(self._vis)
+        if self.clock == "time":
+            xyz, vis = self._resampled(xyz, vis)
+        return xyz.astype(np.float32, copy=False)[None], vis.astype(np.float32, copy=False)[None]
+
+    def _resampled(self, xyz: np.ndarray, vis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        times = np.asarray(self._t, np.float64)[None]
+        out_xyz, out_vis = resample_windows(times, xyz[None], vis[None], self.size, self.rate)
+        assert out_vis is not None
+        return out_xyz[0], out_vis[0]

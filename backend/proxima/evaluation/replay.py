@@ -118,6 +118,7 @@ class MemoClassifier:
     def __init__(self, classifier: Classifier) -> None:
         self.classifier = classifier
         self.window = classifier.window
+        self.window_clock = classifier.window_clock
         self.labels = classifier.labels
         self._memo: dict[bytes, np.ndarray] = {}
 
@@ -144,6 +145,7 @@ class _Recorder:
     def __init__(self, classifier: Classifier) -> None:
         self.classifier = classifier
         self.window = classifier.window
+        self.window_clock = classifier.window_clock
         self.labels = classifier.labels
         self.outputs: list[np.ndarray] = []
 

@@ -58,7 +58,7 @@ def window_accuracy(
         cap = model.apply_clip(part, rng)
         if smoothed:
             cap = smooth(cap)
-        xyz, _, _ = live_windows(cap, classifier.window, stride)
+        xyz, _, _ = live_windows(cap, classifier.window, stride, clock=classifier.window_clock)
         if not len(xyz):
             continue
         probs = classifier.predict(xyz, aspect=part.aspect)

@@ -119,6 +119,7 @@ def captured_windows(
     level: int,
     config: RobustnessConfig,
     window: int,
+    clock: str = "poses",
 ) -> dict[str, np.ndarray]:
     """The engine's windows of every clip captured under `model`, `repeats` times:
     xyz (N, window, 33, 3), labels, clip index, aspect and has_z per window, subsampled
@@ -132,7 +133,7 @@ def captured_windows(
             cap = model.apply_clip(clip, capture_rng(config.seed, name, level, repeat, i))
             if len(cap) < window:
                 continue
-            xyz, _vis, _t = live_windows(cap, window, config.stride)
+            xyz, _vis, _t = live_windows(cap, window, config.stride, clock=clock)
             n = len(xyz)
             if not n:
                 continue
@@ -200,7 +201,7 @@ def window_robustness(
     """`clean` and every configured condition at levels 1-3 (see the module)."""
 
     def run(name: str, level: int, model: CaptureModel) -> dict[str, Any]:
-        w = captured_windows(clips, model, name, level, config, clf.window)
+        w = captured_windows(clips, model, name, level, config, clf.window, clf.window_clock)
         return score_condition(clf, clips, w)
 
     clean = run("clean", 0, condition("clean"))

@@ -85,6 +85,14 @@ class GestureClassifier:
         self.labels = labels
         self.metadata = metadata
 
+    @property
+    def window_clock(self) -> str:
+        """The engine window's clock for this model: "time" if its training windows were
+        resampled to 30 per second (`TrainConfig.window_clock` time or mixed), else
+        "poses" (also every checkpoint made before the option)."""
+        clock = self.metadata.get("train_config", {}).get("window_clock", "poses")
+        return "time" if clock in ("time", "mixed") else "poses"
+
     @classmethod
     def load(cls, path: str | Path | None = None) -> GestureClassifier:
         """Load a checkpoint (default: the shipped model).

@@ -83,6 +83,15 @@ def train(
             "CONDITION:LEVEL:SHARE,... [default: clean:1:0.2,field:1:0.4,field:2:0.4]"
         ),
     ] = None,
+    window_clock: Annotated[
+        str,
+        typer.Option(
+            help="With --augment capture: poses (a window is the last poses received, at "
+            "any camera rate), time (camera rates under 30 fps resampled to 30 per second, "
+            "as the engine's window_clock = time) or mixed (half of such windows each way; "
+            "the engine then resamples)."
+        ),
+    ] = "poses",
     calibration_share: Annotated[
         float | None,
         typer.Option(
@@ -116,7 +125,7 @@ def train(
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, window=window,
                       max_gap=max_gap, seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
                       transitions=transitions, refit=refit, augment=augment,
-                      trim_idle=trim_idle)  # fmt: skip
+                      trim_idle=trim_idle, window_clock=window_clock)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     if calibration_share is not None:

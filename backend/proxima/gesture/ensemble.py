@@ -28,13 +28,19 @@ class EnsembleClassifier:
             raise ValueError("an ensemble needs at least one member")
         first = members[0]
         for m in members[1:]:
-            if m.window != first.window or tuple(m.labels) != tuple(first.labels):
+            if (
+                m.window != first.window
+                or tuple(m.labels) != tuple(first.labels)
+                or m.window_clock != first.window_clock
+            ):
                 raise ValueError(
                     f"ensemble members disagree: window {m.window} / {first.window}, "
-                    f"labels {len(m.labels)} / {len(first.labels)}"
+                    f"labels {len(m.labels)} / {len(first.labels)}, "
+                    f"window clock {m.window_clock} / {first.window_clock}"
                 )
         self.members = list(members)
         self.window = first.window
+        self.window_clock = first.window_clock
         self.labels = tuple(first.labels)
         self.model_name = "+".join(m.model_name for m in members)
 

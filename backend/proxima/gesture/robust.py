@@ -25,6 +25,7 @@ import numpy as np
 
 from proxima.gesture.capture import CaptureModel, condition
 from proxima.gesture.clip import Clip
+from proxima.gesture.timebase import resample_windows
 from proxima.gesture.windows import WINDOW, Windows, window_starts
 from proxima.pose.one_euro import LIVE_ONE_EURO, one_euro_windows
 
@@ -159,9 +160,12 @@ def capture_windows(
     rng: np.random.Generator,
     window: int = WINDOW,
     warmup: int = WARMUP,
+    clock: str = "poses",
 ) -> np.ndarray:
     """Fresh capture-noised, One-Euro-smoothed versions of windows `w` (N, window, 33, 3):
-    each window draws a condition of `mix` by its share (see the module).
+    each window draws a condition of `mix` by its share (see the module). `clock`: the
+    last `window` poses received ("poses"), or under frame-rate and loss effects the last
+    (window - 1) / 30 s resampled to `window` poses ("time"; "mixed": half of them).
 
     Raises:
         ValueError: `source` does not hold one entry per window.
@@ -170,7 +174,7 @@ def capture_windows(
         raise ValueError(f"capture source has {len(source)} windows, the batch {len(w)}")
     models, shares = mix_models(mix)
     pick = rng.choice(len(models), size=len(w), p=shares)
-    out = np.empty((len(w), window, 33, 3), np.float32)
+    out = np.full((len(w), window, 33, 3), np.nan, np.float32)  # every window is drawn
     for m, model in enumerate(models):
         idx_all = np.flatnonzero(pick == m)
         warm = min(warmup, source.history - window)
@@ -184,5 +188,13 @@ def capture_windows(
                 sx, sv, rng, aspect=w.aspect[idx], has_z=w.has_z[idx],
                 window=window + warm, with_times=True,
             )  # fmt: skip
-            out[idx] = one_euro_windows(x, t, LIVE_ONE_EURO)[:, warm:]
+            smoothed = one_euro_windows(x, t, LIVE_ONE_EURO)
+            out[idx] = smoothed[:, warm:]
+            if model.timing and clock != "poses":
+                # "mixed": half the windows resampled, half as received (the sped-up
+                # windows of slow cameras as extra variety)
+                timed = np.ones(len(idx), bool) if clock == "time" else rng.random(len(idx)) < 0.5
+                if timed.any():
+                    xyz = resample_windows(t[timed], smoothed[timed], None, window)[0]
+                    out[idx[timed]] = xyz
     return out

@@ -68,6 +68,11 @@ class TrainConfig:
     # Euro filter (gesture/robust.py); "none": the recordings as they are, unfiltered.
     augment: str = "capture"
     capture_mix: list = field(default_factory=lambda: [list(m) for m in CAPTURE_MIX])
+    # "time": capture-noised windows at camera rates under 30 fps are resampled to the
+    # recordings' 30 per second (gesture/timebase.py), as the engine's `window_clock =
+    # "time"` does live; "poses": the last received poses, whatever their rate; "mixed":
+    # half each way (the engine then resamples). Measured: docs/experiments.md.
+    window_clock: str = "poses"
     # With a calibrate: split, the calibration clips' share of each epoch: their few
     # windows (5 s of each clip: about 300 against 4,300 of the inner training part) are
     # repeated to make it (workflow.calibration_fit_parts). Half (with 12 fine-tuning
@@ -97,6 +102,8 @@ def check_config(cfg: TrainConfig) -> None:
     MIN_WINDOW..WINDOW frames."""
     if cfg.augment not in AUGMENTS:
         raise ValueError(f"augment {cfg.augment!r}: choose from {', '.join(AUGMENTS)}")
+    if cfg.window_clock not in ("poses", "time", "mixed"):
+        raise ValueError(f"window clock {cfg.window_clock!r}: choose poses, time or mixed")
     if not MIN_WINDOW <= cfg.window <= WINDOW:
         raise ValueError(
             f"window {cfg.window} frames: must lie between {MIN_WINDOW} and {WINDOW} "
@@ -113,7 +120,7 @@ def validation_features(
         return features(pipeline, w)
     src = source if source is not None else CaptureSource.from_windows(w)
     xyz = capture_windows(w, src, cfg.capture_mix, np.random.default_rng(cfg.seed + 1),
-                          w.xyz.shape[1])  # fmt: skip
+                          w.xyz.shape[1], clock=cfg.window_clock)  # fmt: skip
     return pipeline.transform(to_metric(xyz, w.aspect), w.has_z)
 
 
@@ -131,7 +138,8 @@ def augmented(
     labels = w.labels
     if metric is None:
         src = source if source is not None else CaptureSource.from_windows(w)
-        metric = to_metric(capture_windows(w, src, cfg.capture_mix, rng, w.xyz.shape[1]), w.aspect)
+        xyz = capture_windows(w, src, cfg.capture_mix, rng, w.xyz.shape[1], clock=cfg.window_clock)
+        metric = to_metric(xyz, w.aspect)
     if cfg.transitions:
         metric = transitions(metric, labels, w.scene, rng, cfg.transitions)
     if cfg.time_warp:
