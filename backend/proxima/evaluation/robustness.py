@@ -357,8 +357,10 @@ def run_robustness(
         "limit": config.limit,
         "test_clips": len(test),
         "method": "each test clip part captured whole (one draw per recording and repeat), "
-        "cut into the live engine's windows (60 received poses, every `stride`, restarting "
-        "after 0.25 s without a pose); live: stitched held-out streams through the real engine",
+        "cut into the live engine's windows (the model's window of received poses, or of "
+        "seconds resampled for a time-clock model, every `stride`, restarting after 0.25 s "
+        "without a pose); live: stitched held-out streams through the real engine",
+        "window_clock": clf.window_clock,
     }
     result.update(window_robustness(clf, test, config, progress))
     if config.live:
