@@ -189,12 +189,12 @@ def capture_windows(
                 window=window + warm, with_times=True,
             )  # fmt: skip
             smoothed = one_euro_windows(x, t, LIVE_ONE_EURO)
-            out[idx] = smoothed[:, warm:]
+            # which windows are resampled ("mixed": half; the sped-up windows of slow
+            # cameras as extra variety); the others are the last poses received
+            timed = np.zeros(len(idx), bool)
             if model.timing and clock != "poses":
-                # "mixed": half the windows resampled, half as received (the sped-up
-                # windows of slow cameras as extra variety)
                 timed = np.ones(len(idx), bool) if clock == "time" else rng.random(len(idx)) < 0.5
-                if timed.any():
-                    xyz = resample_windows(t[timed], smoothed[timed], None, window)[0]
-                    out[idx[timed]] = xyz
+            out[idx[~timed]] = smoothed[~timed, warm:]
+            if timed.any():
+                out[idx[timed]] = resample_windows(t[timed], smoothed[timed], None, window)[0]
     return out
