@@ -19,11 +19,14 @@ from proxima.evaluation.robustness import (
     capture_rng,
     captured_stream,
     captured_windows,
+    command_figures,
 )
+from proxima.evaluation.scoring import score_commands
 from proxima.gesture.capture import condition
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
-LIVE_KEYS = {"command_precision", "command_recall", "wrong_per_hour", "p95_onset_to_command_s"}
+LIVE_KEYS = {"command_precision", "command_recall", "command_recall_script", "wrong_per_hour",
+             "p95_onset_to_command_s"}  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -53,6 +56,8 @@ def test_the_command_writes_the_named_fields_and_a_png(small_run) -> None:
     for name in ("clean", "field"):
         assert set(live[name]) >= LIVE_KEYS, live[name]
         assert live[name]["expected_commands"] > 0
+        assert live[name]["expected_by_script"] > 0
+        assert all(set(v) >= LIVE_KEYS for v in live[name]["per_view"].values())
     assert live["streams"]["count"] == 2 and live["field_condition"]["level"] == 1
     assert live["field"]["fps"][1] <= 30.0
 
@@ -94,3 +99,21 @@ def test_bad_requests_name_the_problem() -> None:
         RobustnessConfig(conditions=("fog",))
     with pytest.raises(RobustnessError, match="live level"):
         RobustnessConfig(live_level=4)
+
+
+def test_recall_against_the_script_counts_what_a_missed_arming_blocked() -> None:
+    script = [{"gesture": g, "onset_t": 4.0 * k} for k, g in
+              enumerate(["have_command", "move_ahead", "land", "wave_off", "hover"])]  # fmt: skip
+    # Control never armed: the run's own arming expects have_command alone (one miss);
+    # the operator asked for four commands (hover came after wave_off disarmed).
+    figures = command_figures(score_commands(script, [], 20.0, arming=[]),
+                              score_commands(script, [], 20.0))  # fmt: skip
+    assert (figures["command_recall"], figures["expected_commands"]) == (0.0, 1)
+    assert (figures["command_recall_script"], figures["expected_by_script"]) == (0.0, 4)
+    assert figures["blocked_while_disarmed"] == 4
+    # Armed at 1 s and everything came: both recalls are 1.
+    cmds = [{"t": 1.0 + 4 * k, "command": g, "stream": "a"} for k, g in
+            enumerate(["have_command", "move_ahead", "land", "wave_off"])]  # fmt: skip
+    armed = score_commands(script, cmds, 20.0, arming=[(1.0, True), (13.0, False)])
+    figures = command_figures(armed, score_commands(script, cmds, 20.0))
+    assert figures["command_recall"] == figures["command_recall_script"] == 1.0

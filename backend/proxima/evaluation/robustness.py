@@ -19,7 +19,9 @@ Two checks, both on the held-out part of a split, both repeatable (fixed seeds):
   (`replay.engine_run`: replay source, stream pipeline, merge, controller), as recorded
   (`clean`) and captured whole under `field` at `live_level` (one draw per stream), and
   their commands are scored (`scoring`): command precision and recall, wrong commands
-  per hour and p95 onset-to-command.
+  per hour and p95 onset-to-command; recall also against the script's own arming
+  (`command_recall_script`: a stream whose `have_command` never arms control misses
+  every command after it, where `command_recall` counts one miss).
 
 `proxima robustness` runs both and writes the JSON and a PNG of accuracy against level.
 """
@@ -39,8 +41,8 @@ from proxima.control import ControlSettings
 from proxima.engine.config import EngineSettings
 from proxima.evaluation.latency import build_streams, describe_streams
 from proxima.evaluation.metrics import accuracy_by, metrics
-from proxima.evaluation.replay import MemoClassifier, engine_run
-from proxima.evaluation.scoring import Score
+from proxima.evaluation.replay import MemoClassifier, engine_run, truth_segments
+from proxima.evaluation.scoring import Score, score_commands
 from proxima.evaluation.stitch import StitchedStream
 from proxima.gesture.capture import EFFECTS, CaptureModel, condition, live_windows
 from proxima.gesture.classifier import GestureClassifier
@@ -49,7 +51,8 @@ from proxima.types import GESTURES
 
 CONDITION_NAMES = (*EFFECTS, "field")  # what `conditions` may name (clean always runs)
 LEVEL_NUMBERS = (1, 2, 3)
-VIEW_KEYS = ("command_precision", "command_recall", "wrong_per_hour", "p95_onset_to_command_s")
+VIEW_KEYS = ("command_precision", "command_recall", "command_recall_script", "wrong_per_hour",
+             "p95_onset_to_command_s", "missed_by_gesture")  # fmt: skip
 Progress = Callable[[str, int], None]  # (what was done, how many steps) -> None
 
 
@@ -246,17 +249,26 @@ def captured_stream(
     )
 
 
-def command_figures(score: Score) -> dict[str, Any]:
+def command_figures(score: Score, script: Score) -> dict[str, Any]:
     """The live check's figures of a merged `Score`: command precision (right commands
     over all commands the operator's gestures caused; safety hovers apart) and recall
     (expected commands that came, late ones included; a withheld one is missed), wrong
-    commands per hour and the p95 onset-to-command (s)."""
+    commands per hour and the p95 onset-to-command (s). `score` expects what the run's
+    own arming allowed (a missed `have_command` is one miss; the gestures after it that
+    disarmed control ignored count as `blocked_while_disarmed`); `script` scores the same
+    commands against every command the script asks for once armed
+    (`command_recall_script`): what the operator wanted, so a stream that never arms
+    misses all of its commands."""
     s = score.summary()
+    by_script = script.summary()
     right = score.hits + score.late
     issued = right + score.wrong + score.repeats
     return {
         "command_precision": round(right / issued, 4) if issued else None,
         "command_recall": s["hit_rate"],
+        "command_recall_script": by_script["hit_rate"],
+        "expected_by_script": by_script["expected_commands"],
+        "blocked_while_disarmed": s["blocked_while_disarmed"],
         "wrong_per_hour": s["wrong_per_hour"],
         "wrong_or_spurious_per_hour": s["wrong_or_spurious_per_hour"],
         "p95_onset_to_command_s": s["latency_p95_s"],
@@ -269,6 +281,7 @@ def command_figures(score: Score) -> dict[str, Any]:
         "repeats": s["repeats"],
         "stream_hours": s["stream_hours"],
         "missed_by_gesture": s["missed_by_gesture"],
+        "latency_by_gesture": s["latency_by_gesture"],
         "wrong_by_pair": s["wrong_by_pair"],
         "wrong_examples": score.wrong_examples[:10],
     }
@@ -289,22 +302,27 @@ def live_robustness(
     memo = MemoClassifier(clf)  # clean windows recur little, but the cost is nil
     out: dict[str, Any] = {}
     for name in ("clean", "field"):
-        total = Score()
-        per_view: dict[str, Score] = {}
+        total, total_script = Score(), Score()
+        per_view: dict[str, tuple[Score, Score]] = {}
         fps: list[float] = []
         for k, stream in enumerate(streams):
             if name == "field":
                 rng = capture_rng(config.seed, "live-field", config.live_level, 0, k)
                 stream = captured_stream(stream, model, rng)
             fps.append(stream.fps)
-            score = engine_run(stream, config.control, config.engine, memo).score(stream)
+            run = engine_run(stream, config.control, config.engine, memo)
+            score = run.score(stream)
+            script = score_commands(truth_segments(stream), run.commands, stream.duration_s)
             total.merge(score)
-            per_view.setdefault(stream.view, Score()).merge(score)
+            total_script.merge(script)
+            view = per_view.setdefault(stream.view, (Score(), Score()))
+            view[0].merge(score)
+            view[1].merge(script)
             progress(f"live {name} {k + 1}/{len(streams)}", 1)
         out[name] = {
-            **command_figures(total),
+            **command_figures(total, total_script),
             "per_view": {
-                v: {key: command_figures(s)[key] for key in VIEW_KEYS}
+                v: {key: command_figures(*s)[key] for key in VIEW_KEYS}
                 for v, s in sorted(per_view.items())
             },
             "fps": [round(min(fps), 2), round(max(fps), 2)],
@@ -397,14 +415,16 @@ def markdown_table(result: dict[str, Any]) -> str:
     if live:
         lines += [
             "",
-            "| live streams | precision | recall | wrong / h | p95 onset-to-command (s) |",
-            "|---|---|---|---|---|",
+            "| live streams | precision | recall | recall (script) | wrong / h "
+            "| p95 onset-to-command (s) |",
+            "|---|---|---|---|---|---|",
         ]
         for name in ("clean", "field"):
             r = live[name]
             label = name if name == "clean" else f"field {live['field_condition']['level']}"
             lines.append(
                 f"| {label} | {r['command_precision']} | {r['command_recall']} | "
-                f"{r['wrong_per_hour']} | {r['p95_onset_to_command_s']} |"
+                f"{r.get('command_recall_script', '-')} | {r['wrong_per_hour']} | "
+                f"{r['p95_onset_to_command_s']} |"
             )
     return "\n".join(lines)
