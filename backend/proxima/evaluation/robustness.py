@@ -287,6 +287,12 @@ def command_figures(score: Score, script: Score) -> dict[str, Any]:
     }
 
 
+def view_figures(score: Score, script: Score) -> dict[str, Any]:
+    """The `VIEW_KEYS` of `command_figures`: what the JSON keeps per camera view."""
+    figures = command_figures(score, script)
+    return {key: figures[key] for key in VIEW_KEYS}
+
+
 def live_robustness(
     clf: GestureClassifier,
     clips: Sequence[Clip],
@@ -321,10 +327,7 @@ def live_robustness(
             progress(f"live {name} {k + 1}/{len(streams)}", 1)
         out[name] = {
             **command_figures(total, total_script),
-            "per_view": {
-                v: {key: command_figures(*s)[key] for key in VIEW_KEYS}
-                for v, s in sorted(per_view.items())
-            },
+            "per_view": {v: view_figures(*s) for v, s in sorted(per_view.items())},
             "fps": [round(min(fps), 2), round(max(fps), 2)],
         }
     out["field_condition"] = {"level": config.live_level, "capture": model.describe()}
