@@ -64,9 +64,12 @@ class Run:
         elif isinstance(e, ArmingEvent):
             self.arming.append((e.t, e.armed))
 
-    def score(self, stream: StitchedStream) -> Score:
-        """The run's commands against `stream`'s ground truth."""
-        return score_commands(truth_segments(stream), self.commands, stream.duration_s, self.arming)
+    def score(self, stream: StitchedStream, by_script: bool = False) -> Score:
+        """The run's commands against `stream`'s ground truth: expecting what the run's own
+        arming allowed, or with `by_script` every command the script asks for once armed
+        (`scoring.expected_commands` with no arming events)."""
+        arming = None if by_script else self.arming
+        return score_commands(truth_segments(stream), self.commands, stream.duration_s, arming)
 
 
 def truth_segments(stream: StitchedStream) -> list[dict[str, Any]]:

@@ -41,8 +41,8 @@ from proxima.control import ControlSettings
 from proxima.engine.config import EngineSettings
 from proxima.evaluation.latency import build_streams, describe_streams
 from proxima.evaluation.metrics import accuracy_by, metrics
-from proxima.evaluation.replay import MemoClassifier, engine_run, truth_segments
-from proxima.evaluation.scoring import Score, score_commands
+from proxima.evaluation.replay import MemoClassifier, engine_run
+from proxima.evaluation.scoring import Score
 from proxima.evaluation.stitch import StitchedStream
 from proxima.gesture.capture import EFFECTS, CaptureModel, condition, live_windows
 from proxima.gesture.classifier import GestureClassifier
@@ -318,7 +318,7 @@ def live_robustness(
             fps.append(stream.fps)
             run = engine_run(stream, config.control, config.engine, memo)
             score = run.score(stream)
-            script = score_commands(truth_segments(stream), run.commands, stream.duration_s)
+            script = run.score(stream, by_script=True)
             total.merge(score)
             total_script.merge(script)
             view = per_view.setdefault(stream.view, (Score(), Score()))
@@ -427,7 +427,7 @@ def markdown_table(result: dict[str, Any]) -> str:
             label = name if name == "clean" else f"field {live['field_condition']['level']}"
             lines.append(
                 f"| {label} | {r['command_precision']} | {r['command_recall']} | "
-                f"{r.get('command_recall_script', '-')} | {r['wrong_per_hour']} | "
+                f"{r['command_recall_script']} | {r['wrong_per_hour']} | "
                 f"{r['p95_onset_to_command_s']} |"
             )
     return "\n".join(lines)
