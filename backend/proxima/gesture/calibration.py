@@ -33,12 +33,23 @@ class TemperatureFit:
         return {k: (round(v, 5) if isinstance(v, float) else v) for k, v in asdict(self).items()}
 
 
-def nll(logits: np.ndarray, labels: np.ndarray, temperature: float = 1.0) -> float:
-    """Mean negative log-likelihood of `labels` under softmax(logits / temperature)."""
+def nll(
+    logits: np.ndarray,
+    labels: np.ndarray,
+    temperature: float = 1.0,
+    either: tuple[np.ndarray, list[int]] | None = None,
+) -> float:
+    """Mean negative log-likelihood of `labels` under softmax(logits / temperature).
+    `either` (mask (N,), classes): the masked windows score the classes' summed
+    probability (a thumb gesture a window cannot show, train.thumb_unseen)."""
     z = np.asarray(logits, np.float64) / temperature
     z = z - z.max(axis=1, keepdims=True)
     logp = z - np.log(np.exp(z).sum(axis=1, keepdims=True))
-    return float(-logp[np.arange(len(labels)), labels].mean())
+    ll = logp[np.arange(len(labels)), labels]
+    if either is not None:
+        mask, classes = either
+        ll = np.where(mask, np.log(np.exp(logp[:, classes]).sum(axis=1)), ll)
+    return float(-ll.mean())
 
 
 def ece(probs: np.ndarray, labels: np.ndarray, bins: int = 15) -> float:
@@ -54,9 +65,11 @@ def ece(probs: np.ndarray, labels: np.ndarray, bins: int = 15) -> float:
     return float(total)
 
 
-def fit_temperature(logits: np.ndarray, labels: np.ndarray) -> TemperatureFit:
+def fit_temperature(
+    logits: np.ndarray, labels: np.ndarray, either: tuple[np.ndarray, list[int]] | None = None
+) -> TemperatureFit:
     """The T in `T_RANGE` of least NLL on (logits (N, C), labels (N,)): a log-spaced grid,
-    then golden-section search around its best (NLL is convex in 1/T).
+    then golden-section search around its best (NLL is convex in 1/T). `either`: as `nll`.
 
     Raises:
         ValueError: no windows, or logits and labels of different lengths.
@@ -68,26 +81,26 @@ def fit_temperature(logits: np.ndarray, labels: np.ndarray) -> TemperatureFit:
             f"temperature: need windows with labels, got {len(logits)} and {len(labels)}"
         )
     grid = np.geomspace(*T_RANGE, 61)
-    k = int(np.argmin([nll(logits, labels, t) for t in grid]))
+    k = int(np.argmin([nll(logits, labels, t, either) for t in grid]))
     lo, hi = math.log(grid[max(k - 1, 0)]), math.log(grid[min(k + 1, len(grid) - 1)])
     g = (math.sqrt(5) - 1) / 2
     a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-    fa, fb = nll(logits, labels, math.exp(a)), nll(logits, labels, math.exp(b))
+    fa, fb = nll(logits, labels, math.exp(a), either), nll(logits, labels, math.exp(b), either)
     for _ in range(40):
         if fa < fb:
             hi, b, fb = b, a, fa
             a = hi - g * (hi - lo)
-            fa = nll(logits, labels, math.exp(a))
+            fa = nll(logits, labels, math.exp(a), either)
         else:
             lo, a, fa = a, b, fb
             b = lo + g * (hi - lo)
-            fb = nll(logits, labels, math.exp(b))
+            fb = nll(logits, labels, math.exp(b), either)
     t = math.exp((lo + hi) / 2)
     return TemperatureFit(
         temperature=t,
         windows=len(labels),
-        nll_before=nll(logits, labels, 1.0),
-        nll_after=nll(logits, labels, t),
+        nll_before=nll(logits, labels, 1.0, either),
+        nll_after=nll(logits, labels, t, either),
         ece_before=ece(softmax(logits), labels),
         ece_after=ece(softmax(logits, t), labels),
     )

@@ -92,6 +92,13 @@ def train(
             "the engine then resamples)."
         ),
     ] = "poses",
+    thumb_pair: Annotated[
+        str,
+        typer.Option(
+            help="label: every window taught its label; either: all_clear / not_clear windows "
+            "that do not see the right hand (all of UAV-Gesture's) taught only 'one of the two'."
+        ),
+    ] = "label",
     calibration_share: Annotated[
         float | None,
         typer.Option(
@@ -125,7 +132,8 @@ def train(
     cfg = TrainConfig(epochs=epochs, patience=patience, stride=stride, window=window,
                       max_gap=max_gap, seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
                       transitions=transitions, refit=refit, augment=augment,
-                      trim_idle=trim_idle, window_clock=window_clock)  # fmt: skip
+                      trim_idle=trim_idle, window_clock=window_clock,
+                      thumb_pair=thumb_pair)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     if calibration_share is not None:

@@ -20,12 +20,14 @@ from proxima.gesture.idle import trim_idle
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
 from proxima.gesture.robust import CaptureSource, history_rows
 from proxima.gesture.train import (
+    PAIR,
     EpochLog,
     TrainConfig,
     check_config,
     chosen_schedule,
     fit,
     fit_schedule,
+    pair_mask,
     predict_logits,
     validation_features,
 )
@@ -219,7 +221,10 @@ def train_model(
     calib = None
     if len(val_w):
         xv = validation_features(pipeline, val_w, cfg, sources["val"])
-        calib = fit_temperature(predict_logits(model, xv), val_w.labels)
+        either = pair_mask(val_w, cfg)
+        calib = fit_temperature(
+            predict_logits(model, xv), val_w.labels, None if either is None else (either, PAIR)
+        )
     meta = {
         "command": command,
         "split": split,
