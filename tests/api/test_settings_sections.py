@@ -43,6 +43,7 @@ def test_every_engine_control_and_safety_parameter_is_set_from_toml(tmp_path: Pa
                         "hold_s": 0.5, "regain_s": 0.75, "rearm_on_handover": False,
                         "decision": "evidence", "evidence_threshold": 5.0,
                         "evidence_threshold_by_command": {"land": 6.0},
+                        "evidence_prior_by_command": {"have_command": 2.0},
                         "evidence_half_life_s": 1.5, "evidence_clip": 2.0},
         "safety": {"geofence_radius_m": 20.0, "min_altitude_m": 2.0, "max_altitude_m": 12.0,
                    "max_step_m": 2.0, "min_interval_s": 0.5, "operator_lost_s": 4.0,

@@ -132,3 +132,28 @@ def test_evidence_accrues_per_stream_second_whatever_the_frame_rate() -> None:
         fired[fps] = next(k * dt for k in range(100) if rule.update(k * dt, p).action == "a")
     assert fired[30] == pytest.approx(13 / 6)  # the 14th recognition
     assert abs(fired[15] - fired[30]) <= 1 / 3 and abs(fired[10] - fired[30]) <= 0.5
+
+
+def test_a_prior_weight_multiplies_a_gestures_odds_and_settles_doubt_towards_it() -> None:
+    labels = ("have_command", "move_ahead", "hover")
+    p = np.array([0.4, 0.55, 0.05])  # a side view's doubt between the two
+    plain = EvidenceAccumulator(labels, threshold=1.5, half_life_s=100.0, clip=10.0)
+    weighed = EvidenceAccumulator(
+        labels, threshold=1.5, half_life_s=100.0, clip=10.0, prior={"have_command": 2.0}
+    )
+    plain.update(0.0, p)
+    out = weighed.update(0.0, p)
+    # odds 0.4 / 0.6 doubled: log-odds + log 2, and move_ahead's odds fall with it
+    assert weighed.score[0] == pytest.approx(np.log(0.4 / 0.6) + np.log(2.0))
+    assert weighed.score[1] == pytest.approx(np.log(0.55 / (1 - 0.55)) - np.log(1.4), abs=0.2)
+    assert weighed.score[1] < plain.score[1]
+    np.testing.assert_allclose(out.probs, p)  # the recognition itself is reported as it was
+    got = [weighed.update(k / 6, p).action for k in range(1, 12)]
+    assert "have_command" in got and "move_ahead" not in got
+    assert "move_ahead" in [plain.update(k / 6, p).action for k in range(1, 12)]
+    with pytest.raises(ValueError, match="prior weights"):
+        EvidenceAccumulator(labels, prior={"hover": 0.0})
+    with pytest.raises(ValueError, match="unknown gesture"):
+        ControlSettings(evidence_prior_by_command={"have_comand": 2.0})
+    rule = decision_filter(ControlSettings(evidence_prior_by_command={"have_command": 2.0}), labels)
+    assert isinstance(rule, EvidenceAccumulator) and rule.prior == {"have_command": 2.0}

@@ -9,7 +9,10 @@ half-life of `half_life_s` stream seconds and never falls below 0 (a CUSUM): a g
 named at 0.7 gains 0.85 a window and fires after a few, one named at 0.97 after two;
 a gesture the classifier keeps below 0.5 only loses, so a mix where no gesture holds the
 majority never fires. The action is the gesture of the highest score once that reaches
-`threshold` (or its own entry in `thresholds`). Evidence accrues per stream second, not
+`threshold` (or its own entry in `thresholds`). `prior` weighs a gesture's probability
+before the log-odds (then renormalised), which multiplies its odds by the weight: doubt
+between `have_command` (a re-arm while armed, which moves no drone) and a motion is
+settled towards the one that does nothing. Evidence accrues per stream second, not
 per recognition: a recognition adds its log-odds times the seconds since the previous
 one over `REFERENCE_INTERVAL_S` (stride 5 at 30 fps, where the settings were tuned), so
 a 15 fps camera, with half the recognitions, arms as fast as a 30 fps one (counted per
@@ -58,6 +61,7 @@ class EvidenceAccumulator:
         clip: float = 3.0,
         reset_after_s: float = 1.0,
         thresholds: Mapping[str, float] | None = None,
+        prior: Mapping[str, float] | None = None,
     ) -> None:
         if threshold <= 0 or half_life_s <= 0 or clip <= 0:
             raise ValueError(
@@ -71,6 +75,11 @@ class EvidenceAccumulator:
         self.clip = clip
         self.reset_after_s = reset_after_s
         self._need = np.array([self.thresholds.get(lab, threshold) for lab in self.labels])
+        self.prior = dict(prior or {})
+        if any(v <= 0 for v in self.prior.values()):
+            raise ValueError(f"evidence rule: prior weights must be > 0, got {self.prior}")
+        weights = np.array([self.prior.get(lab, 1.0) for lab in self.labels])
+        self._weights = None if np.all(weights == 1.0) else weights
         self.reset()
 
     @classmethod
@@ -82,6 +91,7 @@ class EvidenceAccumulator:
             control.evidence_clip,
             control.filter_reset_s,
             control.evidence_threshold_by_command,
+            control.evidence_prior_by_command,
         )
 
     def reset(self) -> None:
@@ -101,13 +111,16 @@ class EvidenceAccumulator:
             raise ValueError(f"expected {len(self.labels)} probabilities, got {p.shape[0]}")
         if self._last_t is not None and t - self._last_t > self.reset_after_s:
             self.reset()
+        weighed = p  # the prior's odds: a gesture's probability times its weight
+        if self._weights is not None:
+            weighed = p * self._weights / float(np.dot(p, self._weights))
         dt = 0.0 if self._last_t is None else max(t - self._last_t, 0.0)
         decay = 0.5 ** (dt / self.half_life_s)
         # the stream time this recognition stands for (the first: one reference interval);
         # rounded so that 30 fps at stride 5 weighs exactly 1
         weight = 1.0 if self._last_t is None else round(dt / REFERENCE_INTERVAL_S, 6)
         self._last_t = t
-        q = np.clip(p, P_FLOOR, 1.0 - P_FLOOR)
+        q = np.clip(weighed, P_FLOOR, 1.0 - P_FLOOR)
         llr = np.clip(np.log(q) - np.log1p(-q), -self.clip, self.clip)
         self.score = np.maximum(decay * self.score + weight * llr, 0.0)
         share = self.score / self._need

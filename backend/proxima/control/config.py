@@ -80,6 +80,12 @@ class ControlSettings(BaseModel):
         description="evidence rule: per-command `evidence_threshold`, e.g. {'have_command': "
         "17.5}: arming alone moves no drone, and the side views name it at 0.6-0.9",
     )
+    evidence_prior_by_command: ThresholdByEvidence = Field(
+        default_factory=dict,
+        description="evidence rule: per-command weight on the calibrated probability (its "
+        "odds times the weight) before the log-odds, e.g. {'have_command': 2}: doubt between "
+        "have_command, which moves no drone, and a motion is settled towards it",
+    )
     evidence_half_life_s: float = Field(
         2.0, gt=0.0, description="evidence rule: stream seconds in which evidence halves"
     )
