@@ -6,7 +6,7 @@ import pytest
 from pydantic import ValidationError
 
 from proxima.control import ControlSettings, HandEvidence
-from proxima.control.evidence import hand_seen
+from proxima.control.evidence import hand_seen, hands_seen
 from proxima.types import GESTURES
 
 
@@ -23,6 +23,11 @@ def test_the_side_cameras_see_the_hand_on_their_side_only(laser_clips) -> None:
         assert windows_seen(clips[f"{gesture}_r"], "right") == 1.0
         assert windows_seen(clips[f"{gesture}_l"], "right") == 0.0
         assert windows_seen(clips[f"{gesture}_l"], "left") > 0.8
+    # the batch form (training's mask) judges every window as the engine does
+    clip = clips["all_clear_l"]
+    batch = np.stack([clip.visibility[s : s + 60] for s in range(0, len(clip) - 60, 7)])
+    for hand in ("left", "right"):
+        assert hands_seen(batch, hand, 0.5).tolist() == [hand_seen(v, hand, 0.5) for v in batch]
 
 
 def test_a_hidden_hand_withholds_only_the_thumb_gestures(laser_clips) -> None:

@@ -78,8 +78,8 @@ def test_the_temperature_fit_scores_marked_windows_on_the_pair() -> None:
     labels = np.where(rng.random(200) < 0.5, PAIR[0], PAIR[1])
     logits[np.arange(200), PAIR[0]] += 4  # the model says all_clear whatever the thumb
     mask = np.ones(200, dtype=bool)
-    assert nll(logits, labels, 1.0, (mask, PAIR)) < nll(logits, labels, 1.0)
-    fit = fit_temperature(logits, labels, (mask, PAIR))
+    assert nll(logits, labels, 1.0, mask) < nll(logits, labels, 1.0)
+    fit = fit_temperature(logits, labels, mask)
     assert fit.nll_after <= fit.nll_before + 1e-9
 
 

@@ -23,11 +23,16 @@ THUMB_GESTURES = ("all_clear", "not_clear")
 FINGERS = {"left": (17, 19, 21), "right": (18, 20, 22)}
 
 
+def hands_seen(visibility: np.ndarray, hand: str, min_visibility: float) -> np.ndarray:
+    """Per window (`visibility` (..., W, 33)), whether at least half its frames see
+    `hand`: the median visibility of its finger points reaches `min_visibility`."""
+    per_frame = np.median(visibility[..., list(FINGERS[hand])], axis=-1)
+    return np.mean(per_frame >= min_visibility, axis=-1) >= 0.5
+
+
 def hand_seen(visibility: np.ndarray, hand: str, min_visibility: float) -> bool:
-    """Whether at least half the frames of a window (`visibility` (W, 33)) see `hand`: the
-    median visibility of its finger points reaches `min_visibility`."""
-    per_frame = np.median(visibility[:, FINGERS[hand]], axis=1)
-    return bool(np.mean(per_frame >= min_visibility) >= 0.5)
+    """`hands_seen` of one window (`visibility` (W, 33))."""
+    return bool(hands_seen(visibility, hand, min_visibility))
 
 
 class HandEvidence:

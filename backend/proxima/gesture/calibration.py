@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from proxima.gesture.train import softmax
+from proxima.gesture.train import label_logp, softmax
 
 T_RANGE = (0.05, 20.0)
 
@@ -37,19 +37,14 @@ def nll(
     logits: np.ndarray,
     labels: np.ndarray,
     temperature: float = 1.0,
-    either: tuple[np.ndarray, list[int]] | None = None,
+    either: np.ndarray | None = None,
 ) -> float:
-    """Mean negative log-likelihood of `labels` under softmax(logits / temperature).
-    `either` (mask (N,), classes): the masked windows score the classes' summed
-    probability (a thumb gesture a window cannot show, train.thumb_unseen)."""
+    """Mean negative log-likelihood of `labels` under softmax(logits / temperature);
+    windows marked in `either` score the thumb pair together (`train.label_logp`)."""
     z = np.asarray(logits, np.float64) / temperature
     z = z - z.max(axis=1, keepdims=True)
     logp = z - np.log(np.exp(z).sum(axis=1, keepdims=True))
-    ll = logp[np.arange(len(labels)), labels]
-    if either is not None:
-        mask, classes = either
-        ll = np.where(mask, np.log(np.exp(logp[:, classes]).sum(axis=1)), ll)
-    return float(-ll.mean())
+    return float(-label_logp(logp, labels, either).mean())
 
 
 def ece(probs: np.ndarray, labels: np.ndarray, bins: int = 15) -> float:
@@ -66,7 +61,7 @@ def ece(probs: np.ndarray, labels: np.ndarray, bins: int = 15) -> float:
 
 
 def fit_temperature(
-    logits: np.ndarray, labels: np.ndarray, either: tuple[np.ndarray, list[int]] | None = None
+    logits: np.ndarray, labels: np.ndarray, either: np.ndarray | None = None
 ) -> TemperatureFit:
     """The T in `T_RANGE` of least NLL on (logits (N, C), labels (N,)): a log-spaced grid,
     then golden-section search around its best (NLL is convex in 1/T). `either`: as `nll`.

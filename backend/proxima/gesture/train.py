@@ -22,7 +22,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from proxima.control.evidence import FINGERS, THUMB_GESTURES
+from proxima.control.evidence import THUMB_GESTURES, hands_seen
 from proxima.gesture.augment import mirror, rotate, time_warp, transitions
 from proxima.gesture.features import Pipeline
 from proxima.gesture.geometry import to_metric
@@ -37,11 +37,18 @@ PAIR = [GESTURES.index(g) for g in THUMB_GESTURES]
 
 def thumb_unseen(w: Windows, hand: str = "right", min_visibility: float = 0.5) -> np.ndarray:
     """(N,) bool: windows of `all_clear` / `not_clear` whose recording does not see the
-    thumb hand by the engine's rule (`control.evidence.hand_seen`; OpenPose clips have no
+    thumb hand by the engine's rule (`control.evidence.hands_seen`; OpenPose clips have no
     hand points, so none of theirs does)."""
-    fingers = w.vis[:, :, list(FINGERS[hand])]  # (N, W, 3)
-    seen = np.mean(np.median(fingers, axis=2) >= min_visibility, axis=1) >= 0.5
-    return np.isin(w.labels, PAIR) & ~seen
+    return np.isin(w.labels, PAIR) & ~hands_seen(w.vis, hand, min_visibility)
+
+
+def label_logp(logp: np.ndarray, labels: np.ndarray, either: np.ndarray | None) -> np.ndarray:
+    """(N,) log-probability of each window's label under `logp` (N, C); windows marked in
+    `either` score the thumb pair's summed probability."""
+    ll = logp[np.arange(len(labels)), labels]
+    if either is None:
+        return ll
+    return np.where(either, np.logaddexp(logp[:, PAIR[0]], logp[:, PAIR[1]]), ll)
 
 
 def pair_mask(w: Windows, cfg: TrainConfig) -> np.ndarray | None:
@@ -229,10 +236,7 @@ def evaluate_loss(
     if len(x) == 0:
         return float("nan"), float("nan")
     p = predict_proba(model, x)
-    right = p[np.arange(len(y)), y]
-    if either is not None:
-        right = np.where(either, p[:, PAIR].sum(axis=1), right)
-    loss = -np.log(np.clip(right, 1e-9, 1)).mean()
+    loss = -label_logp(np.log(np.clip(p, 1e-9, 1)), y, either).mean()
     return float(loss), float((p.argmax(1) == y).mean())
 
 
@@ -258,10 +262,11 @@ def _train_epoch(
     penalty: Callable[[nn.Module], torch.Tensor] | None = None,
     source: CaptureSource | None = None,
     after_step: Callable[[nn.Module], None] | None = None,
+    either: torch.Tensor | None = None,
 ) -> float:
-    """One epoch over freshly augmented windows; returns the mean training loss."""
+    """One epoch over freshly augmented windows (`either`: `pair_mask` of `train`);
+    returns the mean training loss."""
     x, y = augmented(pipeline, metric, train, cfg, rng, source)
-    either = pair_mask(train, cfg)
     order = rng.permutation(len(x))
     model.train()
     total = 0.0
@@ -269,7 +274,7 @@ def _train_epoch(
         idx = order[i : i + cfg.batch_size]
         xb, yb = torch.from_numpy(x[idx]), torch.from_numpy(y[idx])
         opt.zero_grad()
-        loss = loss_fn(model(xb), yb, None if either is None else torch.from_numpy(either[idx]))
+        loss = loss_fn(model(xb), yb, None if either is None else either[idx])
         (loss + penalty(model) if penalty is not None else loss).backward()
         nn.utils.clip_grad_norm_(model.parameters(), cfg.clip_norm)
         opt.step()
@@ -281,16 +286,21 @@ def _train_epoch(
 
 def _start(
     model: nn.Module, train: Windows, cfg: TrainConfig
-) -> tuple[np.random.Generator, np.ndarray | None, torch.optim.Optimizer, nn.Module]:
+) -> tuple[
+    np.random.Generator, np.ndarray | None, torch.optim.Optimizer, nn.Module, torch.Tensor | None
+]:
     """What every run sets up first: (the seeded rng, the metric windows (None with
-    capture augmentation: redrawn each epoch), the optimiser, the loss), with torch's
-    threads and seeds set."""
+    capture augmentation: redrawn each epoch), the optimiser, the loss, the windows taught
+    the thumb pair (`pair_mask`; None: every window its label)), with torch's threads and
+    seeds set."""
     check_config(cfg)
     torch.set_num_threads(cfg.threads)
     rng = seed_everything(cfg.seed)
     metric = None if cfg.augment == "capture" else to_metric(train.xyz, train.aspect)
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    return rng, metric, opt, PairLoss(cfg.label_smoothing)
+    mask = pair_mask(train, cfg)
+    either = None if mask is None else torch.from_numpy(mask)
+    return rng, metric, opt, PairLoss(cfg.label_smoothing), either
 
 
 def fit(
@@ -318,7 +328,7 @@ def fit(
     `val_source` hold the rows before each window for capture augmentation (robust.py;
     without them the frame-rate and loss effects are off). Returns one log entry per epoch.
     """
-    rng, metric, opt, loss_fn = _start(model, train, cfg)
+    rng, metric, opt, loss_fn, either = _start(model, train, cfg)
     xv = (
         validation_features(pipeline, val, cfg, val_source)
         if val is not None and len(val)
@@ -335,7 +345,18 @@ def fit(
     for epoch in range(1, cfg.epochs + 1):
         t0 = time.perf_counter()
         train_loss = _train_epoch(
-            model, opt, loss_fn, pipeline, metric, train, cfg, rng, penalty, source, after_step
+            model,
+            opt,
+            loss_fn,
+            pipeline,
+            metric,
+            train,
+            cfg,
+            rng,
+            penalty,
+            source,
+            after_step,
+            either,
         )
         if xv is not None:
             val_loss, val_acc = evaluate_loss(model, xv, val.labels, either_val)  # type: ignore[union-attr]
@@ -414,13 +435,15 @@ def fit_schedule(
     """Train `model` in place for one epoch per entry of `lrs`, at that learning rate,
     with the same augmentation and clipping as `fit` and no validation (the log's
     validation fields are NaN)."""
-    rng, metric, opt, loss_fn = _start(model, train, cfg)
+    rng, metric, opt, loss_fn, either = _start(model, train, cfg)
     history: list[EpochLog] = []
     for epoch, lr in enumerate(lrs, start=1):
         t0 = time.perf_counter()
         for group in opt.param_groups:
             group["lr"] = lr
-        loss = _train_epoch(model, opt, loss_fn, pipeline, metric, train, cfg, rng, None, source)
+        loss = _train_epoch(
+            model, opt, loss_fn, pipeline, metric, train, cfg, rng, None, source, None, either
+        )
         log = EpochLog(epoch, loss, float("nan"), float("nan"), lr, time.perf_counter() - t0)
         history.append(log)
         if on_epoch:

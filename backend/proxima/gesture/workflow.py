@@ -20,7 +20,6 @@ from proxima.gesture.idle import trim_idle
 from proxima.gesture.models import DEFAULT_PIPELINE, build_model
 from proxima.gesture.robust import CaptureSource, history_rows
 from proxima.gesture.train import (
-    PAIR,
     EpochLog,
     TrainConfig,
     check_config,
@@ -221,10 +220,7 @@ def train_model(
     calib = None
     if len(val_w):
         xv = validation_features(pipeline, val_w, cfg, sources["val"])
-        either = pair_mask(val_w, cfg)
-        calib = fit_temperature(
-            predict_logits(model, xv), val_w.labels, None if either is None else (either, PAIR)
-        )
+        calib = fit_temperature(predict_logits(model, xv), val_w.labels, pair_mask(val_w, cfg))
     meta = {
         "command": command,
         "split": split,
