@@ -13,7 +13,10 @@ runs/window/w30-s2.pt --retune bench/results/evidence_retune-t24-whole.json --st
 `--whole-stream-capture` captures each stream in one draw at 15-30 fps, as `proxima
 robustness` does (the shipped defaults were chosen so); without it, clip by clip at 30
 fps (`bench/results/decision_check.json`). Recognitions are cached as
-`bench.window_length` caches them (`recs-<stem>-t0-e48-g30[-whole].pkl`).
+`bench.window_length` caches them (`recs-<stem>-t0-e48-g30[-whole].pkl`). `--prior
+have_command=2` adds the defaults with that `evidence_prior_by_command`; the wrong
+commands are also split by what they do to the drone (`scoring`: re-arms, wrong
+armings, acting).
 """
 
 from __future__ import annotations
@@ -39,10 +42,15 @@ SINGLE_THRESHOLD = ControlSettings(
 )
 
 
-def settings_of(retune: dict[str, Any]) -> dict[str, ControlSettings]:
-    """The defaults, the single threshold before them, and the settings a
-    `bench.evidence_retune` result selected."""
+def settings_of(
+    retune: dict[str, Any], priors: dict[str, float] | None = None
+) -> dict[str, ControlSettings]:
+    """The defaults, the single threshold before them, the settings a
+    `bench.evidence_retune` result selected, and with `priors` the defaults with that
+    `evidence_prior_by_command`."""
     out = {"defaults": ControlSettings(), "single_threshold": SINGLE_THRESHOLD}
+    if priors:
+        out["defaults_prior"] = ControlSettings(evidence_prior_by_command=priors)
     selected = control_for(retune["selected"]["setting"])
     out["selected"] = selected
     if "by_command" in retune:
@@ -58,11 +66,16 @@ def check(sets: list[tuple], control: ControlSettings) -> dict[str, Any]:
     for cond in ("clean", "field1"):
         summaries = [evaluate_config(*es[cond], control) for _, es in sets]  # one per seed
         pooled = pool(summaries)
+        script = pool([evaluate_config(*es[cond], control, by_script=True) for _, es in sets])
         pairs = sum((Counter(s["wrong_by_pair"]) for s in summaries), Counter())
         out[cond] = {
             "mean": mean_headline([headline_of(s) for s in summaries]),
             "hours": round(sum(s["stream_hours"] for s in summaries), 2),
+            "hit_rate_by_script": script["hit_rate"],
             "wrong": pooled["wrong"],
+            "re_arms": pooled["re_arms"],
+            "wrong_arming": pooled["wrong_arming"],
+            "wrong_acting": pooled["wrong"] - pooled["re_arms"] - pooled["wrong_arming"],
             "repeats": pooled["repeats"],
             "wrong_or_spurious_per_hour": pooled["wrong_or_spurious_per_hour"],
             "wrong_by_pair": dict(pairs.most_common()),
@@ -73,16 +86,26 @@ def check(sets: list[tuple], control: ControlSettings) -> dict[str, Any]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--retune", type=Path, required=True, help="bench.evidence_retune's JSON")
+    ap.add_argument("--prior", action="append", default=[], metavar="GESTURE=WEIGHT",
+                    help="also the defaults with this evidence prior (repeat)")  # fmt: skip
     out = Path("bench/results/decision_check.json")
     args, checkpoints, sets, t0 = held_out_start(ap, out, tune_streams=0, streams=48)
     retune = json.loads(args.retune.read_text())["result"]
     result: dict[str, Any] = {"checkpoints": checkpoints, "streams": args.streams}
-    for name, control in settings_of(retune).items():
+    priors = {g: float(w) for g, _, w in (p.partition("=") for p in args.prior)}
+    for name, control in settings_of(retune, priors).items():
         result[name] = {"setting": control.model_dump(), **check(sets, control)}
         row = result[name]
         log(f"{name}: {json.dumps({c: row[c]['mean'] for c in ('clean', 'field1')})}")
         rates = [row[c]["wrong_or_spurious_per_hour"] for c in ("clean", "field1")]
         log(f"  wrong or repeated per hour: clean {rates[0]}, field {rates[1]}")
+        split = [(row[c]["re_arms"], row[c]["wrong_arming"], row[c]["wrong_acting"])
+                 for c in ("clean", "field1")]  # fmt: skip
+        log(
+            f"  by the script: clean {row['clean']['hit_rate_by_script']}, "
+            f"field {row['field1']['hit_rate_by_script']}"
+        )
+        log(f"  wrong as re-arms / arming / acting: clean {split[0]}, field {split[1]}")
     write_doc(args.out, "decision_check", "decision_check", result, t0)
 
 

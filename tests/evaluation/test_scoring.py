@@ -3,9 +3,14 @@ judge): every kind of outcome, and the per-gesture latency figures."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from proxima.evaluation.scoring import latency_figures, score_commands
+from proxima.control import ControlSettings
+from proxima.control.arbiter import Sight
+from proxima.control.controller import CommandController, StreamUpdate
+from proxima.evaluation.replay import Run
+from proxima.evaluation.scoring import Score, latency_figures, score_commands
 
 SEGMENTS = [
     {"gesture": "have_command", "onset_t": 0.0},
@@ -71,3 +76,43 @@ def test_latency_figures_of_no_commands_are_empty() -> None:
         "p95_s": None,
         "within_2_5_s": None,
     }
+
+
+def test_wrong_commands_split_by_what_they_do_to_the_drone() -> None:
+    # The real controller decides; the run records the arming each command was sent in.
+    controller = CommandController(["main"], "drone", ControlSettings())
+    run = Run()
+    actions = [
+        (0, 3, "have_command"),  # arms (right)
+        (5, 8, "move_ahead"),  # right
+        (11, 13, "have_command"),  # during hover, control armed: a re-arm, nothing moves
+        (14, 16, "move_upward"),  # during hover: a wrong motion
+        (17, 20, "wave_off"),  # right; disarms
+        (23, 25, "have_command"),  # during move_ahead, disarmed: arms wrongly
+        (27, 30, "move_ahead"),  # right (control is armed now)
+    ]
+    for start, stop, action in actions:
+        for t in np.arange(start, stop, 0.1):
+            for event in controller.process(StreamUpdate("main", float(t), Sight.FULL, action)):
+                run.add(event)
+    assert [(c["command"], c["armed"]) for c in run.commands] == [
+        ("have_command", False),
+        ("move_ahead", True),
+        ("have_command", True),
+        ("move_upward", True),
+        ("wave_off", True),
+        ("have_command", False),
+        ("move_ahead", True),
+    ]
+    script = [("have_command", 0), ("move_ahead", 4), ("hover", 10), ("wave_off", 16.5)]
+    segments = [{"gesture": g, "onset_t": t} for g, t in [*script, ("move_ahead", 22)]]
+    score = score_commands(segments, run.commands, 36.0, run.arming)
+    assert (score.wrong, score.re_arms, score.wrong_arming, score.wrong_acting) == (3, 1, 1, 1)
+    summary = score.summary()
+    assert summary["wrong_per_hour"] == pytest.approx(300.0)
+    assert summary["wrong_acting_per_hour"] == pytest.approx(100.0)
+    merged = Score().merge(score).merge(score)
+    assert (merged.re_arms, merged.wrong_arming, merged.wrong_acting) == (2, 2, 2)
+    # Commands that do not say their arming are all counted as acting.
+    bare = [{k: v for k, v in c.items() if k != "armed"} for c in run.commands]
+    assert score_commands(segments, bare, 36.0, run.arming).wrong_acting == 3

@@ -192,12 +192,14 @@ def evaluate_config(
     streams: Sequence[StitchedStream],
     recognitions: Sequence[Recognitions],
     control: ControlSettings,
+    by_script: bool = False,
 ) -> dict[str, Any]:
     """The score summary of the decision settings `control` over `streams` (offline
-    replay of their `recognitions`)."""
+    replay of their `recognitions`); with `by_script`, against every command the script
+    asks for once armed (`replay.Run.score`)."""
     total = Score()
     for stream, rec in zip(streams, recognitions, strict=True):
-        total.merge(decide(rec, control).score(stream))
+        total.merge(decide(rec, control).score(stream, by_script))
     return total.summary()
 
 

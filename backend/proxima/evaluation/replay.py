@@ -52,6 +52,7 @@ class Run:
         self.commands: list[dict[str, Any]] = []
         self.arming: list[tuple[float, bool]] = []
         self.events = 0
+        self._armed = False  # the controller's arming when the next command was decided
         # offline replays only: (t, the classifier's top label, what the filter passed,
         # whether a new window stretch began)
         self.recognitions: list[tuple[float, str, str, bool]] = []
@@ -60,9 +61,14 @@ class Run:
         """Take one event of the run (every event counts; commands and arming are kept)."""
         self.events += 1
         if isinstance(e, CommandEvent):
-            self.commands.append({"t": e.t, "command": e.command, "stream": e.stream})
+            # The controller reports a command before the arming change it causes, so
+            # `armed` is the state the command was sent in.
+            self.commands.append(
+                {"t": e.t, "command": e.command, "stream": e.stream, "armed": self._armed}
+            )
         elif isinstance(e, ArmingEvent):
             self.arming.append((e.t, e.armed))
+            self._armed = e.armed
 
     def score(self, stream: StitchedStream, by_script: bool = False) -> Score:
         """The run's commands against `stream`'s ground truth: expecting what the run's own

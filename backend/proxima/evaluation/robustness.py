@@ -21,7 +21,9 @@ Two checks, both on the held-out part of a split, both repeatable (fixed seeds):
   their commands are scored (`scoring`): command precision and recall, wrong commands
   per hour and p95 onset-to-command; recall also against the script's own arming
   (`command_recall_script`: a stream whose `have_command` never arms control misses
-  every command after it, where `command_recall` counts one miss).
+  every command after it, where `command_recall` counts one miss); the wrong commands
+  also split by what they do to the drone (`re_arms`: a `have_command` while armed, which
+  moves nothing; `wrong_arming`; `wrong_acting_per_hour`: the rest).
 
 `proxima robustness` runs both and writes the JSON and a PNG of accuracy against level.
 """
@@ -270,6 +272,7 @@ def command_figures(score: Score, script: Score) -> dict[str, Any]:
         "expected_by_script": by_script["expected_commands"],
         "blocked_while_disarmed": s["blocked_while_disarmed"],
         "wrong_per_hour": s["wrong_per_hour"],
+        "wrong_acting_per_hour": s["wrong_acting_per_hour"],
         "wrong_or_spurious_per_hour": s["wrong_or_spurious_per_hour"],
         "p95_onset_to_command_s": s["latency_p95_s"],
         "median_onset_to_command_s": s["latency_median_s"],
@@ -278,6 +281,8 @@ def command_figures(score: Score, script: Score) -> dict[str, Any]:
         "commands_right": right,
         "missed": s["missed"],
         "wrong": s["wrong"],
+        "re_arms": s["re_arms"],
+        "wrong_arming": s["wrong_arming"],
         "repeats": s["repeats"],
         "stream_hours": s["stream_hours"],
         "missed_by_gesture": s["missed_by_gesture"],

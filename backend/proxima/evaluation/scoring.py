@@ -15,7 +15,11 @@ the transition after a gesture still belongs to it).
   began (the previous one had none yet); its latency counts from its own onset.
 - repeat: a further command for the same segment and gesture (a spurious command: the
   drone would move twice).
-- wrong: any other command (a gesture nobody performed then).
+- wrong: any other command (a gesture nobody performed then). Split by what it does to
+  the drone, where the command says whether control was armed when it was sent
+  (`armed`, as a run records it): a `have_command` while armed only re-arms (`re_arms`,
+  nothing moves), one while disarmed arms control nobody asked for (`wrong_arming`), and
+  the rest act on the drone (`wrong_acting`: motions, landings, the aborts).
 - safety: the hover sent when no stream sees the operator (stream ""), e.g. at the end
   of a replay; counted apart.
 - missed: a segment whose expected command never came.
@@ -45,12 +49,20 @@ class Score:
     blocked: int = 0
     repeats: int = 0
     wrong: int = 0
+    re_arms: int = 0
+    wrong_arming: int = 0
     safety: int = 0
     latencies: list[float] = field(default_factory=list)
     latency_by_gesture: dict[str, list[float]] = field(default_factory=dict)
     wrong_examples: list[dict[str, Any]] = field(default_factory=list)
     missed_by_gesture: dict[str, int] = field(default_factory=dict)
     wrong_by_pair: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def wrong_acting(self) -> int:
+        """Wrong commands that change what the drone does (all but the re-arms and the
+        wrong armings, when the commands said their arming)."""
+        return self.wrong - self.re_arms - self.wrong_arming
 
     def add_latency(self, gesture: str, seconds: float) -> None:
         self.latencies.append(seconds)
@@ -65,6 +77,8 @@ class Score:
         self.blocked += other.blocked
         self.repeats += other.repeats
         self.wrong += other.wrong
+        self.re_arms += other.re_arms
+        self.wrong_arming += other.wrong_arming
         self.safety += other.safety
         self.latencies.extend(other.latencies)
         for g, lat in other.latency_by_gesture.items():
@@ -105,7 +119,11 @@ class Score:
             "within_2_5_s": figures["within_2_5_s"],
             "wrong": self.wrong,
             "repeats": self.repeats,
+            "re_arms": self.re_arms,
+            "wrong_arming": self.wrong_arming,
+            "wrong_acting": self.wrong_acting,
             "wrong_per_hour": per_hour(self.wrong),
+            "wrong_acting_per_hour": per_hour(self.wrong_acting),
             "spurious_per_hour": per_hour(self.repeats),
             "wrong_or_spurious_per_hour": per_hour(self.wrong + self.repeats),
             "safety_hovers": self.safety,
@@ -170,7 +188,8 @@ def score_commands(
     duration_s: float,
     arming: Sequence[tuple[float, bool]] | None = None,
 ) -> Score:
-    """Score `commands` (dicts with `t`, `command`, `stream`) against truth `segments`
+    """Score `commands` (dicts with `t`, `command`, `stream`, optionally `armed`: the
+    arming they were sent in) against truth `segments`
     (dicts with `gesture`, `onset_t`, as in a stitched stream's truth file), given the
     run's arming changes `arming` ((t, armed) pairs; None: simulated on the script)."""
     onsets = np.array([s["onset_t"] for s in segments], dtype=float)
@@ -197,6 +216,11 @@ def score_commands(
             score.add_latency(name, t - onsets[i - 1])
         else:
             score.wrong += 1
+            if name == ARM_GESTURE and "armed" in c:
+                if c["armed"]:
+                    score.re_arms += 1
+                else:
+                    score.wrong_arming += 1
             key = f"{segments[i]['gesture']}->{name}"
             score.wrong_by_pair[key] = score.wrong_by_pair.get(key, 0) + 1
             if len(score.wrong_examples) < 20:
