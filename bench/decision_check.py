@@ -14,7 +14,9 @@ runs/window/w30-s2.pt --retune bench/results/evidence_retune-t24-whole.json --st
 robustness` does (the shipped defaults were chosen so); without it, clip by clip at 30
 fps (`bench/results/decision_check.json`). Recognitions are cached as
 `bench.window_length` caches them (`recs-<stem>-t0-e48-g30[-whole].pkl`). `--prior
-have_command=2` adds the defaults with that `evidence_prior_by_command`; the wrong
+have_command=2` adds the defaults with that `evidence_prior_by_command`, `--variant
+'NAME={"evidence_threshold_by_command": {"have_command": 14}}'` the defaults with those
+settings (tables updated entry by entry); the wrong
 commands are also split by what they do to the drone (`scoring`: re-arms, wrong
 armings, acting).
 """
@@ -42,15 +44,30 @@ SINGLE_THRESHOLD = ControlSettings(
 )
 
 
+def variant(update: dict[str, Any]) -> ControlSettings:
+    """The defaults with `update`'s fields; a table (e.g. `evidence_threshold_by_command`)
+    is updated entry by entry, not replaced."""
+    base = ControlSettings().model_dump()
+    for key, value in update.items():
+        if isinstance(value, dict) and isinstance(base.get(key), dict):
+            value = {**base[key], **value}
+        base[key] = value
+    return ControlSettings.model_validate(base)
+
+
 def settings_of(
-    retune: dict[str, Any], priors: dict[str, float] | None = None
+    retune: dict[str, Any],
+    priors: dict[str, float] | None = None,
+    variants: dict[str, dict[str, Any]] | None = None,
 ) -> dict[str, ControlSettings]:
     """The defaults, the single threshold before them, the settings a
-    `bench.evidence_retune` result selected, and with `priors` the defaults with that
-    `evidence_prior_by_command`."""
+    `bench.evidence_retune` result selected, with `priors` the defaults with that
+    `evidence_prior_by_command`, and each of `variants` (name -> `variant`'s update)."""
     out = {"defaults": ControlSettings(), "single_threshold": SINGLE_THRESHOLD}
     if priors:
         out["defaults_prior"] = ControlSettings(evidence_prior_by_command=priors)
+    for name, update in (variants or {}).items():
+        out[name] = variant(update)
     selected = control_for(retune["selected"]["setting"])
     out["selected"] = selected
     if "by_command" in retune:
@@ -88,12 +105,15 @@ def main() -> None:
     ap.add_argument("--retune", type=Path, required=True, help="bench.evidence_retune's JSON")
     ap.add_argument("--prior", action="append", default=[], metavar="GESTURE=WEIGHT",
                     help="also the defaults with this evidence prior (repeat)")  # fmt: skip
+    ap.add_argument("--variant", action="append", default=[], metavar="NAME=JSON",
+                    help="also the defaults updated with these settings (repeat)")  # fmt: skip
     out = Path("bench/results/decision_check.json")
     args, checkpoints, sets, t0 = held_out_start(ap, out, tune_streams=0, streams=48)
     retune = json.loads(args.retune.read_text())["result"]
     result: dict[str, Any] = {"checkpoints": checkpoints, "streams": args.streams}
     priors = {g: float(w) for g, _, w in (p.partition("=") for p in args.prior)}
-    for name, control in settings_of(retune, priors).items():
+    variants = {n: json.loads(u) for n, _, u in (v.partition("=") for v in args.variant)}
+    for name, control in settings_of(retune, priors, variants).items():
         result[name] = {"setting": control.model_dump(), **check(sets, control)}
         row = result[name]
         log(f"{name}: {json.dumps({c: row[c]['mean'] for c in ('clean', 'field1')})}")

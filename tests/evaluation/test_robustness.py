@@ -26,7 +26,7 @@ from proxima.gesture.capture import condition
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
 LIVE_KEYS = {"command_precision", "command_recall", "command_recall_script", "wrong_per_hour",
-             "p95_onset_to_command_s"}  # fmt: skip
+             "wrong_acting_per_hour", "p95_onset_to_command_s"}  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -57,6 +57,7 @@ def test_the_command_writes_the_named_fields_and_a_png(small_run) -> None:
         assert set(live[name]) >= LIVE_KEYS, live[name]
         assert live[name]["expected_commands"] > 0
         assert live[name]["expected_by_script"] > 0
+        assert live[name]["re_arms"] + live[name]["wrong_arming"] <= live[name]["wrong"]
         assert all(set(v) >= LIVE_KEYS for v in live[name]["per_view"].values())
     assert live["streams"]["count"] == 2 and live["field_condition"]["level"] == 1
     assert live["field"]["fps"][1] <= 30.0
