@@ -37,6 +37,10 @@ DecisionRule = Literal["average", "evidence"]
 # The evidence rule's per-command thresholds (nats; the rest need `evidence_threshold`):
 # arming alone moves no drone, and the side views name have_command at 0.6-0.9
 EVIDENCE_BY_COMMAND = {"have_command": 17.5}
+# Its per-command odds weights: doubt between have_command (while armed a re-arm, which
+# moves no drone) and a motion goes to the former; measured over 30 h of held-out
+# streams per condition (docs/experiments.md, "Twenty-seventh session")
+EVIDENCE_PRIOR_BY_COMMAND = {"have_command": 2.0}
 # The operator's hand that all_clear / not_clear need in view; "off": no check.
 ThumbHand = Literal["right", "left", "off"]
 
@@ -81,7 +85,7 @@ class ControlSettings(BaseModel):
         "17.5}: arming alone moves no drone, and the side views name it at 0.6-0.9",
     )
     evidence_prior_by_command: ThresholdByEvidence = Field(
-        default_factory=dict,
+        default_factory=lambda: dict(EVIDENCE_PRIOR_BY_COMMAND),
         description="evidence rule: per-command weight on the calibrated probability (its "
         "odds times the weight) before the log-odds, e.g. {'have_command': 2}: doubt between "
         "have_command, which moves no drone, and a motion is settled towards it",

@@ -230,6 +230,7 @@ def score_commands(
                         "command": name,
                         "performed": segments[i]["gesture"],
                         "since_onset_s": round(t - onsets[i], 3),
+                        **({"armed": c["armed"]} if "armed" in c else {}),
                     }
                 )
     for i, e in enumerate(expected):
