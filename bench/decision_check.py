@@ -14,7 +14,8 @@ runs/window/w30-s2.pt --retune bench/results/evidence_retune-t24-whole.json --st
 robustness` does (the shipped defaults were chosen so); without it, clip by clip at 30
 fps (`bench/results/decision_check.json`). Recognitions are cached as
 `bench.window_length` caches them (`recs-<stem>-t0-e48-g30[-whole].pkl`). `--prior
-have_command=2` adds the defaults with that `evidence_prior_by_command`, `--variant
+have_command=W` adds the defaults with that `evidence_prior_by_command` (W = 1: the
+defaults before 2026-12-06, which had no prior), `--variant
 'NAME={"evidence_threshold_by_command": {"have_command": 14}}'` the defaults with those
 settings (tables updated entry by entry); the wrong
 commands are also split by what they do to the drone (`scoring`: re-arms, wrong
@@ -41,6 +42,7 @@ SINGLE_THRESHOLD = ControlSettings(
     evidence_threshold=16.0,
     evidence_half_life_s=1.0,
     evidence_threshold_by_command={"have_command": 12.0},
+    evidence_prior_by_command={},
 )
 
 
