@@ -34,7 +34,7 @@ from bench.evidence_retune import control_for
 from bench.robust_training import log, write_doc
 from bench.window_length import headline_of, held_out_start, mean_headline
 from proxima.control import ControlSettings
-from proxima.evaluation.latency import evaluate_config
+from proxima.evaluation.latency import evaluate_config_by_script
 from proxima.evaluation.robust_training import pool
 
 # The evidence rule's single-threshold defaults of 2026-12-05's morning
@@ -67,7 +67,7 @@ def settings_of(
     `evidence_prior_by_command`, and each of `variants` (name -> `variant`'s update)."""
     out = {"defaults": ControlSettings(), "single_threshold": SINGLE_THRESHOLD}
     if priors:
-        out["defaults_prior"] = ControlSettings(evidence_prior_by_command=priors)
+        out["defaults_prior"] = variant({"evidence_prior_by_command": priors})
     for name, update in (variants or {}).items():
         out[name] = variant(update)
     selected = control_for(retune["selected"]["setting"])
@@ -83,9 +83,11 @@ def check(sets: list[tuple], control: ControlSettings) -> dict[str, Any]:
     commands of all seeds' streams pooled (with the hours they came in)."""
     out: dict[str, Any] = {}
     for cond in ("clean", "field1"):
-        summaries = [evaluate_config(*es[cond], control) for _, es in sets]  # one per seed
+        # one pair per seed: against the run's own arming, against the script
+        both = [evaluate_config_by_script(*es[cond], control) for _, es in sets]
+        summaries = [own for own, _ in both]
         pooled = pool(summaries)
-        script = pool([evaluate_config(*es[cond], control, by_script=True) for _, es in sets])
+        script = pool([by_script for _, by_script in both])
         pairs = sum((Counter(s["wrong_by_pair"]) for s in summaries), Counter())
         out[cond] = {
             "mean": mean_headline([headline_of(s) for s in summaries]),
@@ -94,7 +96,7 @@ def check(sets: list[tuple], control: ControlSettings) -> dict[str, Any]:
             "wrong": pooled["wrong"],
             "re_arms": pooled["re_arms"],
             "wrong_arming": pooled["wrong_arming"],
-            "wrong_acting": pooled["wrong"] - pooled["re_arms"] - pooled["wrong_arming"],
+            "wrong_acting": pooled["wrong_acting"],
             "repeats": pooled["repeats"],
             "wrong_or_spurious_per_hour": pooled["wrong_or_spurious_per_hour"],
             "wrong_by_pair": dict(pairs.most_common()),

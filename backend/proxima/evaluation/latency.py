@@ -192,15 +192,28 @@ def evaluate_config(
     streams: Sequence[StitchedStream],
     recognitions: Sequence[Recognitions],
     control: ControlSettings,
-    by_script: bool = False,
 ) -> dict[str, Any]:
     """The score summary of the decision settings `control` over `streams` (offline
-    replay of their `recognitions`); with `by_script`, against every command the script
-    asks for once armed (`replay.Run.score`)."""
+    replay of their `recognitions`)."""
     total = Score()
     for stream, rec in zip(streams, recognitions, strict=True):
-        total.merge(decide(rec, control).score(stream, by_script))
+        total.merge(decide(rec, control).score(stream))
     return total.summary()
+
+
+def evaluate_config_by_script(
+    streams: Sequence[StitchedStream],
+    recognitions: Sequence[Recognitions],
+    control: ControlSettings,
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """`evaluate_config`'s summary and the same runs' against every command the script
+    asks for once armed (`replay.Run.score`); each stream is decided once."""
+    own, script = Score(), Score()
+    for stream, rec in zip(streams, recognitions, strict=True):
+        run = decide(rec, control)
+        own.merge(run.score(stream))
+        script.merge(run.score(stream, by_script=True))
+    return own.summary(), script.summary()
 
 
 def tune(

@@ -210,8 +210,9 @@ def pool(summaries: Sequence[dict[str, Any]]) -> dict[str, Any]:
         "latency_p95_s_worst": max(p95) if p95 else None,
         "wrong": wrong,
         "repeats": repeats,
-        "re_arms": sum(s.get("re_arms", 0) for s in summaries),
-        "wrong_arming": sum(s.get("wrong_arming", 0) for s in summaries),
+        "re_arms": sum(s["re_arms"] for s in summaries),
+        "wrong_arming": sum(s["wrong_arming"] for s in summaries),
+        "wrong_acting": sum(s["wrong_acting"] for s in summaries),
         "wrong_or_spurious_per_hour": round((wrong + repeats) / hours, 3) if hours else None,
     }
     out["utility"] = round(utility({**out, "expected_commands": expected}), 4)
