@@ -1,6 +1,6 @@
-"""Commands against wrong commands as the evidence threshold moves: held-out models alone,
-as ensembles, or distilled, on `bench.decision_check`'s held-out evaluation streams (48
-per seed and condition; recognitions cached as that bench caches them).
+"""Commands against wrong commands as the evidence threshold moves: held-out models alone
+or as ensembles, on `bench.decision_check`'s held-out evaluation streams (48 per seed and
+condition; recognitions cached as that bench caches them).
 
     python -m bench.operating_curve --whole-stream-capture \
         --curve w30=runs/window/w30-s0.pt,runs/window/w30-s1.pt,runs/window/w30-s2.pt \
@@ -66,6 +66,9 @@ def curve(sets: list[tuple], thresholds: list[float]) -> list[dict[str, Any]]:
     commands split by what they do, the hours and the median and p95 latency."""
     base = ControlSettings()
     share = base.evidence_threshold_by_command["have_command"] / base.evidence_threshold
+    hours = {  # unrounded: check() rounds its hours to 0.01
+        cond: sum(x.duration_s for _, es in sets for x in es[cond][0]) / 3600 for cond in CONDITIONS
+    }
     rows = []
     for th in thresholds:
         table = {**base.evidence_threshold_by_command, "have_command": share * th}
@@ -82,7 +85,7 @@ def curve(sets: list[tuple], thresholds: list[float]) -> list[dict[str, Any]]:
                 "wrong_arming": o["wrong_arming"],
                 "re_arms": o["re_arms"],
                 "hours": o["hours"],
-                "wrong_acting_per_hour": round(o["wrong_acting"] / o["hours"], 2),
+                "wrong_acting_per_hour": round(o["wrong_acting"] / hours[cond], 2),
                 "latency_median_s": o["mean"]["latency_median_s"],
                 "latency_p95_s": o["mean"]["latency_p95_s"],
             }

@@ -118,3 +118,33 @@ def test_recall_against_the_script_counts_what_a_missed_arming_blocked() -> None
     armed = score_commands(script, cmds, 20.0, arming=[(1.0, True), (13.0, False)])
     figures = command_figures(armed, score_commands(script, cmds, 20.0))
     assert figures["command_recall"] == figures["command_recall_script"] == 1.0
+
+
+def test_an_ensemble_is_scored_on_its_members_mean_probabilities(laser_clips, tmp_path) -> None:
+    """`--checkpoint A,B`: the window figures of the members' mean probabilities (a model
+    with itself scores as the model alone), through the CLI too."""
+    from proxima.evaluation.robustness import score_condition
+    from proxima.gesture.classifier import GestureClassifier
+    from proxima.gesture.ensemble import EnsembleClassifier
+    from proxima.gesture.windows import split_clips
+
+    data = Path(__file__).resolve().parents[2] / "tests" / "data"
+    names = ("gesture-capture-60.pt", "gesture-no-capture.pt")
+    a, b = (GestureClassifier.load(data / n) for n in names)
+    test = split_clips(laser_clips, "temporal", 60).test
+    config = RobustnessConfig(repeats=1, limit=240)
+    w = captured_windows(test, condition("field", 3), "field", 3, config, 60, "poses")
+    alone = score_condition(a, test, w)
+    assert score_condition(EnsembleClassifier([a, a]), test, w) == alone
+    pair = score_condition(EnsembleClassifier([a, b]), test, w)
+    mean = EnsembleClassifier([a, b]).predict(w["xyz"], w["aspect"])  # both T = 1
+    assert pair["accuracy"] == round(float(np.mean(mean.argmax(1) == w["labels"])), 4)
+    assert pair["accuracy"] != alone["accuracy"]
+    out = tmp_path / "ens.json"
+    result = CliRunner().invoke(
+        app, ["robustness", "--checkpoint", ",".join(str(data / n) for n in names),
+              "--split", "temporal", "--json", str(out), "--condition", "roll", "--repeats", "1",
+              "--limit", "60", "--no-live"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert json.loads(out.read_text())["model"] == "tcn+tcn"

@@ -66,7 +66,12 @@ def evaluate(
 
 
 def robustness(
-    checkpoint: Annotated[Path, typer.Option(help="Checkpoint from `proxima train`.")],
+    checkpoint: Annotated[
+        Path,
+        typer.Option(
+            help="Checkpoint from `proxima train`; comma-joined paths score their ensemble."
+        ),
+    ],
     json_out: Annotated[
         Path, typer.Option("--json", help="Where to write the results (the PNG goes beside).")
     ],

@@ -49,6 +49,7 @@ from proxima.evaluation.stitch import StitchedStream
 from proxima.gesture.capture import EFFECTS, CaptureModel, condition, live_windows
 from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.clip import Clip
+from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
 from proxima.types import GESTURES
 
 CONDITION_NAMES = (*EFFECTS, "field")  # what `conditions` may name (clean always runs)
@@ -163,23 +164,28 @@ def captured_windows(
 
 
 def score_condition(
-    clf: GestureClassifier, clips: Sequence[Clip], windows: dict[str, np.ndarray]
+    clf: GestureClassifier | EnsembleClassifier,
+    clips: Sequence[Clip],
+    windows: dict[str, np.ndarray],
 ) -> dict[str, Any]:
-    """Window accuracy, macro F1, per view and per class of `clf` on captured windows."""
+    """Window accuracy, macro F1, per view and per class of `clf` (an ensemble: the mean of
+    its members' probabilities) on captured windows."""
     from proxima.gesture.train import predict_proba
 
     if not len(windows["labels"]):
         return {"windows": 0, "accuracy": None, "macro_f1": None}
-    x = np.concatenate(
-        [
-            clf.features(windows["xyz"][sel], windows["aspect"][sel], has_z=bool(hz))
-            for hz in (True, False)
-            if (sel := windows["has_z"] == hz).any()
-        ]
-    )
+    members = clf.members if isinstance(clf, EnsembleClassifier) else [clf]
     order = np.concatenate([np.flatnonzero(windows["has_z"] == hz) for hz in (True, False)])
-    probs = np.empty((len(order), len(clf.labels)), np.float32)
-    probs[order] = predict_proba(clf.model, x)
+    probs = np.zeros((len(order), len(clf.labels)), np.float32)
+    for m in members:
+        x = np.concatenate(
+            [
+                m.features(windows["xyz"][sel], windows["aspect"][sel], has_z=bool(hz))
+                for hz in (True, False)
+                if (sel := windows["has_z"] == hz).any()
+            ]
+        )
+        probs[order] += predict_proba(m.model, x) / len(members)
     full = metrics(windows["labels"], probs, windows["clip"])
     views = np.array([clips[c].view for c in windows["clip"]])
     return {
@@ -198,7 +204,7 @@ def score_condition(
 
 
 def window_robustness(
-    clf: GestureClassifier,
+    clf: GestureClassifier | EnsembleClassifier,
     clips: Sequence[Clip],
     config: RobustnessConfig,
     progress: Progress = lambda what, n: None,
@@ -299,7 +305,7 @@ def view_figures(score: Score, script: Score) -> dict[str, Any]:
 
 
 def live_robustness(
-    clf: GestureClassifier,
+    clf: GestureClassifier | EnsembleClassifier,
     clips: Sequence[Clip],
     config: RobustnessConfig,
     progress: Progress = lambda what, n: None,
@@ -368,7 +374,7 @@ def run_robustness(
     from proxima.gesture.windows import WINDOW, split_clips
 
     started = time.monotonic()
-    clf = GestureClassifier.load(checkpoint)
+    clf = load_checkpoint(checkpoint)  # comma-joined paths: their ensemble
     data = load_data(data_specs)
     parts = split_clips(data.clips, split, WINDOW, data.uav_dir)  # the protocol's gaps
     test = [c for c in (parts.test or parts.train) if len(c) >= 2]

@@ -99,16 +99,6 @@ def train(
             "that do not see the right hand (all of UAV-Gesture's) taught only 'one of the two'."
         ),
     ] = "label",
-    teacher: Annotated[
-        str,
-        typer.Option(
-            help="Comma-joined checkpoints (same pipeline) whose mean calibrated probabilities "
-            "the model is also taught (distillation of an ensemble into one model)."
-        ),
-    ] = "",
-    distill: Annotated[
-        float, typer.Option(help="With --teacher: the teachers' share of the loss, in (0, 1].")
-    ] = 0.5,
     calibration_share: Annotated[
         float | None,
         typer.Option(
@@ -143,7 +133,7 @@ def train(
                       max_gap=max_gap, seed=seed, threads=threads, yaw_deg=yaw, mirror=mirror,
                       transitions=transitions, refit=refit, augment=augment,
                       trim_idle=trim_idle, window_clock=window_clock,
-                      thumb_pair=thumb_pair, teacher=teacher, distill=distill)  # fmt: skip
+                      thumb_pair=thumb_pair)  # fmt: skip
     if time_warp is not None:
         cfg.time_warp = time_warp
     if calibration_share is not None:

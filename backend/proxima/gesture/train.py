@@ -127,10 +127,6 @@ class TrainConfig:
     # has no hand points, a side view can hide the hand) is taught only "one of the two",
     # so data that cannot show the thumb does not teach a guess from the arm.
     thumb_pair: str = "label"
-    # Distillation (gesture/distill.py): comma-joined checkpoints whose mean calibrated
-    # probabilities the model is also taught, with `distill` the soft target's weight.
-    teacher: str = ""
-    distill: float = 0.5
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -151,15 +147,13 @@ def features(pipeline: Pipeline, w: Windows) -> np.ndarray:
 
 def check_config(cfg: TrainConfig) -> None:
     """Raises ValueError for an unknown `cfg.augment` or a window outside
-    MIN_WINDOW..WINDOW frames, or a distillation weight outside (0, 1]."""
+    MIN_WINDOW..WINDOW frames."""
     if cfg.augment not in AUGMENTS:
         raise ValueError(f"augment {cfg.augment!r}: choose from {', '.join(AUGMENTS)}")
     if cfg.thumb_pair not in THUMB_PAIR:
         raise ValueError(f"thumb pair {cfg.thumb_pair!r}: choose {' or '.join(THUMB_PAIR)}")
     if cfg.window_clock not in ("poses", "time", "mixed"):
         raise ValueError(f"window clock {cfg.window_clock!r}: choose poses, time or mixed")
-    if cfg.teacher and not 0.0 < cfg.distill <= 1.0:
-        raise ValueError(f"distill {cfg.distill}: the teachers' share must be in (0, 1]")
     if not MIN_WINDOW <= cfg.window <= WINDOW:
         raise ValueError(
             f"window {cfg.window} frames: must lie between {MIN_WINDOW} and {WINDOW} "
@@ -280,8 +274,7 @@ def _train_epoch(
         idx = order[i : i + cfg.batch_size]
         xb, yb = torch.from_numpy(x[idx]), torch.from_numpy(y[idx])
         opt.zero_grad()
-        eb = None if either is None else either[idx]
-        loss = loss_fn(model(xb), yb, eb, xb) if cfg.teacher else loss_fn(model(xb), yb, eb)
+        loss = loss_fn(model(xb), yb, None if either is None else either[idx])
         (loss + penalty(model) if penalty is not None else loss).backward()
         nn.utils.clip_grad_norm_(model.parameters(), cfg.clip_norm)
         opt.step()
@@ -292,14 +285,14 @@ def _train_epoch(
 
 
 def _start(
-    model: nn.Module, train: Windows, cfg: TrainConfig, pipeline: Pipeline
+    model: nn.Module, train: Windows, cfg: TrainConfig
 ) -> tuple[
     np.random.Generator, np.ndarray | None, torch.optim.Optimizer, nn.Module, torch.Tensor | None
 ]:
     """What every run sets up first: (the seeded rng, the metric windows (None with
     capture augmentation: redrawn each epoch), the optimiser, the loss, the windows taught
     the thumb pair (`pair_mask`; None: every window its label)), with torch's threads and
-    seeds set; with `cfg.teacher` the loss is `distill.DistillLoss` over it."""
+    seeds set."""
     check_config(cfg)
     torch.set_num_threads(cfg.threads)
     rng = seed_everything(cfg.seed)
@@ -307,12 +300,7 @@ def _start(
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     mask = pair_mask(train, cfg)
     either = None if mask is None else torch.from_numpy(mask)
-    loss: nn.Module = PairLoss(cfg.label_smoothing)
-    if cfg.teacher:
-        from proxima.gesture.distill import DistillLoss, Teacher  # it loads checkpoints
-
-        loss = DistillLoss(loss, Teacher.load(cfg.teacher, pipeline), cfg.distill)
-    return rng, metric, opt, loss, either
+    return rng, metric, opt, PairLoss(cfg.label_smoothing), either
 
 
 def fit(
@@ -340,7 +328,7 @@ def fit(
     `val_source` hold the rows before each window for capture augmentation (robust.py;
     without them the frame-rate and loss effects are off). Returns one log entry per epoch.
     """
-    rng, metric, opt, loss_fn, either = _start(model, train, cfg, pipeline)
+    rng, metric, opt, loss_fn, either = _start(model, train, cfg)
     xv = (
         validation_features(pipeline, val, cfg, val_source)
         if val is not None and len(val)
@@ -447,7 +435,7 @@ def fit_schedule(
     """Train `model` in place for one epoch per entry of `lrs`, at that learning rate,
     with the same augmentation and clipping as `fit` and no validation (the log's
     validation fields are NaN)."""
-    rng, metric, opt, loss_fn, either = _start(model, train, cfg, pipeline)
+    rng, metric, opt, loss_fn, either = _start(model, train, cfg)
     history: list[EpochLog] = []
     for epoch, lr in enumerate(lrs, start=1):
         t0 = time.perf_counter()
