@@ -168,8 +168,9 @@ def score_condition(
     clips: Sequence[Clip],
     windows: dict[str, np.ndarray],
 ) -> dict[str, Any]:
-    """Window accuracy, macro F1, per view and per class of `clf` (an ensemble: the mean of
-    its members' probabilities) on captured windows."""
+    """Window accuracy, macro F1, per view and per class of `clf` on captured windows. An
+    ensemble scores the mean of its members' calibrated probabilities, as the engine runs
+    it; one model its own (untempered: the argmax is the same)."""
     from proxima.gesture.train import predict_proba
 
     if not len(windows["labels"]):
@@ -185,7 +186,8 @@ def score_condition(
                 if (sel := windows["has_z"] == hz).any()
             ]
         )
-        probs[order] += predict_proba(m.model, x) / len(members)
+        temperature = m.temperature if len(members) > 1 else 1.0
+        probs[order] += predict_proba(m.model, x, temperature=temperature) / len(members)
     full = metrics(windows["labels"], probs, windows["clip"])
     views = np.array([clips[c].view for c in windows["clip"]])
     return {
