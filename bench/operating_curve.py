@@ -28,7 +28,7 @@ from typing import Any
 import matplotlib
 import numpy as np
 
-from bench.decision_check import check
+from bench.decision_check import check, variant
 from bench.robust_training import log, recognised_streams, write_doc
 from bench.window_length import add_stream_args, cache_path
 from proxima.control import ControlSettings
@@ -71,11 +71,12 @@ def curve(sets: list[tuple], thresholds: list[float]) -> list[dict[str, Any]]:
     }
     rows = []
     for th in thresholds:
-        table = {**base.evidence_threshold_by_command, "have_command": share * th}
-        control = base.model_copy(
-            update={"evidence_threshold": th, "evidence_threshold_by_command": table}
-        )
-        out = check(sets, control)
+        # `variant` keeps the table's other entries
+        update = {
+            "evidence_threshold": th,
+            "evidence_threshold_by_command": {"have_command": share * th},
+        }
+        out = check(sets, variant(update))
         row: dict[str, Any] = {"threshold": th}
         for cond in CONDITIONS:
             o = out[cond]
