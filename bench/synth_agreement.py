@@ -54,13 +54,15 @@ def agreement(
 ) -> dict[str, Any]:
     import torch
 
-    from proxima.gesture.classifier import GestureClassifier, default_checkpoint
-    from proxima.gesture.train import features, predict_proba
+    from proxima.evaluation.metrics import window_probs
+    from proxima.gesture.classifier import default_checkpoint
+    from proxima.gesture.ensemble import load_checkpoint, members_of
 
     torch.set_num_threads(1)
     ckpt = checkpoint or default_checkpoint()
-    clf = GestureClassifier.load(ckpt)
-    ok, folders = trained_on_real_only(clf.metadata)
+    clf = load_checkpoint(ckpt)  # one model or an ensemble (the shipped one)
+    checks = [trained_on_real_only(m.metadata) for m in members_of(clf)]
+    ok, folders = all(c[0] for c in checks), sorted({f for c in checks for f in c[1]})
     if not ok:
         raise SystemExit(f"{ckpt}: not trained on real data only (data: {folders})")
     view_ranges = [parse_view(v) for v in views]
@@ -85,7 +87,7 @@ def agreement(
         ]
     ).astype(bool)
     t1 = time.perf_counter()
-    probs = predict_proba(clf.model, features(clf.pipeline, w))
+    probs = window_probs(clf, w)
     score_s = time.perf_counter() - t1
     pred = probs.argmax(axis=1)
     views_w = np.array([view_of[w.clip_names[c]] for c in w.clip])

@@ -141,6 +141,7 @@ def test_calibrate_a_stream_and_promote_for_it_only(tmp_path: Path, checkpoint_p
             )
             assert s["state"] == "trained", s
             assert s["epoch"] == 3 and s["candidate"].startswith("calibration/front-")
+            assert s["member"] == s["members"] == 3  # the shipped ensemble, member by member
             for fig in (s["before"], s["after"]):
                 assert set(fig["per_gesture"]) == {"move_downward", "wave_off"}
                 assert fig["windows"] > 0 and 0 <= fig["accuracy"] <= 1

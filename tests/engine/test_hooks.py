@@ -116,19 +116,20 @@ def test_a_failing_tap_is_logged_and_never_stops_recognition(
 
 @pytest.fixture(scope="module")
 def second_checkpoint(tmp_path_factory, classifier) -> Path:
-    """A real second checkpoint: the shipped model's architecture and pipeline, freshly
+    """A real second checkpoint: the shipped members' architecture and pipeline, freshly
     initialised (untrained), so its probabilities differ from the shipped model's."""
     import torch
 
     from proxima.gesture.classifier import save_checkpoint
+    from proxima.gesture.ensemble import members_of
     from proxima.gesture.models import build_model, model_config
 
     torch.manual_seed(7)
-    model = build_model(classifier.model_name, **model_config(classifier.model))
+    first = members_of(classifier)[0]  # the shipped model is an ensemble of such models
+    model = build_model(first.model_name, **model_config(first.model))
     path = tmp_path_factory.mktemp("models") / "untrained.pt"
     meta = {"purpose": "swap test"}
-    window = classifier.window
-    return save_checkpoint(path, model, classifier.model_name, classifier.pipeline, window, meta)
+    return save_checkpoint(path, model, first.model_name, first.pipeline, first.window, meta)
 
 
 @pytest.mark.slow

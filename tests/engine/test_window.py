@@ -76,8 +76,8 @@ def test_the_time_clock_keeps_the_span_of_a_slower_camera(laser_clips) -> None:
     assert due[:4] == [15, 18, 21, 24]
 
 
-def test_the_engine_times_windows_as_the_model_trained(checkpoint, tmp_path) -> None:
-    # A copy of the shipped checkpoint whose training windows were resampled to 30 per
+def test_the_engine_times_windows_as_the_model_trained(shipped_member, tmp_path) -> None:
+    # A copy of a shipped member whose training windows were resampled to 30 per
     # second (`proxima train --window-clock time`); the file round trip is the real one.
     import torch
 
@@ -85,11 +85,11 @@ def test_the_engine_times_windows_as_the_model_trained(checkpoint, tmp_path) -> 
     from proxima.engine.stream import StreamPipeline
     from proxima.gesture.classifier import GestureClassifier
 
-    blob = torch.load(checkpoint, map_location="cpu", weights_only=True)
+    blob = torch.load(shipped_member, map_location="cpu", weights_only=True)
     blob["metadata"].setdefault("train_config", {})["window_clock"] = "time"
     timed = tmp_path / "timed.pt"
     torch.save(blob, timed)
-    shipped, resampled = GestureClassifier.load(checkpoint), GestureClassifier.load(timed)
+    shipped, resampled = GestureClassifier.load(shipped_member), GestureClassifier.load(timed)
     assert (shipped.window_clock, resampled.window_clock) == ("poses", "time")
     spec = StreamSpec(name="a", uri="replay:x")
 

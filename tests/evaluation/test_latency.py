@@ -19,13 +19,14 @@ from proxima.evaluation.latency import (
 )
 from proxima.evaluation.replay import decide, recognize
 from proxima.gesture.classifier import GestureClassifier
+from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
 
 
 @pytest.fixture(scope="module")
-def shipped() -> GestureClassifier:
-    return GestureClassifier.load(SHIPPED)
+def shipped() -> GestureClassifier | EnsembleClassifier:
+    return load_checkpoint(SHIPPED)
 
 
 @pytest.mark.slow

@@ -20,14 +20,15 @@ from proxima.evaluation.replay import (
 )
 from proxima.evaluation.stitch import Blank, apply_blank
 from proxima.gesture.classifier import GestureClassifier
+from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
 from proxima.ingest import read_landmark_csv
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
 
 
 @pytest.fixture(scope="module")
-def shipped() -> GestureClassifier:
-    return GestureClassifier.load(SHIPPED)
+def shipped() -> GestureClassifier | EnsembleClassifier:
+    return load_checkpoint(SHIPPED)
 
 
 @pytest.fixture(scope="module")

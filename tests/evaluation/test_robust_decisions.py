@@ -16,7 +16,7 @@ from proxima.evaluation.robust_training import (
     tune_by_command,
 )
 from proxima.gesture.capture import condition
-from proxima.gesture.classifier import GestureClassifier
+from proxima.gesture.ensemble import load_checkpoint
 from proxima.types import GESTURES
 
 SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
@@ -24,7 +24,7 @@ SHIPPED = Path(__file__).resolve().parents[2] / "models" / "gesture-default.pt"
 
 @pytest.mark.slow
 def test_per_command_thresholds_never_rank_below_the_shared_one(laser_clips) -> None:
-    clf = GestureClassifier.load(SHIPPED)
+    clf = load_checkpoint(SHIPPED)
     streams = decision_streams(laser_clips, [0], 5, condition("field", 1))
     sets = [(streams, recognitions(streams, clf, EngineSettings()))]
     base = ControlSettings(decision="evidence", evidence_threshold=8.0)

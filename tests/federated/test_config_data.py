@@ -119,14 +119,17 @@ def test_updates_that_would_poison_the_average_are_rejected() -> None:
     assert "num-examples" in check_update(_reply(weights, n=0), reference)
 
 
-def test_init_starts_the_global_model_from_a_checkpoint(tmp_path) -> None:
+def test_init_starts_the_global_model_from_a_checkpoint(tmp_path, shipped_member) -> None:
     """`init`: round 0 is the checkpoint's model (scored on the real held-out windows),
-    not the seeded fresh one; a checkpoint that does not fit stops the run, named."""
+    not the seeded fresh one; a checkpoint that does not fit stops the run, named (the
+    shipped ensemble too: a run starts from one model)."""
     from proxima.federated.data import test_windows
     from proxima.federated.task import Scorer, get_weights, start_model
     from proxima.gesture.classifier import GestureClassifier, default_checkpoint
 
-    shipped = default_checkpoint()
+    shipped = shipped_member
+    with pytest.raises(ConfigError, match=r"'init': .*an ensemble of 3 models"):
+        start_model(fast_config(init=str(default_checkpoint())))
     window = GestureClassifier.load(shipped).window
     cfg = fast_config(init=str(shipped), window=window)
     model, _ = start_model(cfg)

@@ -21,12 +21,13 @@ ADMIN = ("chief", "correct-horse-battery")
 def test_promote_swaps_the_live_engine_classifier(tmp_path: Path, laser_dir: Path) -> None:
     from proxima.api.runtime import build_runtime
     from proxima.api.server import BackgroundServer
-    from proxima.gesture.classifier import GestureClassifier, default_checkpoint
+    from proxima.gesture.classifier import default_checkpoint
+    from proxima.gesture.ensemble import load_checkpoint
     from proxima.settings import Settings
 
     models, db = tmp_path / "models", tmp_path / "c.db"
     replay = sorted(laser_dir.glob("DJI_*_hover_f.MP4.csv"))[0]
-    window = GestureClassifier.load(default_checkpoint()).window  # the engine's length
+    window = load_checkpoint(default_checkpoint()).window  # the engine's length
     cfg = fast_config(run_id="20260101-000000-abcd", models_dir=str(models), window=window)
     model, _ = new_model(cfg)
     rounds = [{"round": 0, "global_accuracy": 0.07, "global_loss": 3.1, "clients": []}]

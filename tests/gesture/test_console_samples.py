@@ -147,23 +147,38 @@ def test_take_split_leaves_a_window_between_training_and_held_out(laser_clips) -
 
 
 @pytest.mark.slow
-def test_calibrating_on_takes_scores_before_and_after(tmp_path: Path, laser_clips) -> None:  # type: ignore[no-untyped-def]
+def test_calibrating_on_takes_scores_before_and_after(
+    tmp_path: Path, laser_clips, shipped_member
+) -> None:  # type: ignore[no-untyped-def]
+    """The shipped ensemble has each member fine-tuned and stays an ensemble; one model
+    stays one model. Both keep their temperatures."""
+    from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
+
     takes = [
         next(c for c in laser_clips if c.gesture == g and c.view == "r").slice(20, 230)
         for g in GESTURES
     ]
-    seen: list[int] = []
+    seen: list[tuple[int, int]] = []
+    member = [0]
     res = calibrate_takes(
         default_checkpoint(),
         takes,
         tmp_path / "cal.pt",
         epochs=2,
         threads=1,
-        on_epoch=lambda e, n, loss: seen.append(e),
+        on_epoch=lambda e, n, loss: seen.append((member[0], e)),
+        on_member=lambda i, n: member.__setitem__(0, i),
     )
-    assert seen == [1, 2] and res.epochs == 2
+    assert seen == [(1, 1), (1, 2), (2, 1), (2, 2), (3, 1), (3, 2)] and res.epochs == 2
     assert set(res.before["per_gesture"]) == set(res.after["per_gesture"]) == set(GESTURES)
     assert res.before["windows"] == res.after["windows"] > 0
-    clf = GestureClassifier.load(res.checkpoint)
-    assert clf.metadata["held_out_after"] == res.after
-    assert clf.temperature == GestureClassifier.load(default_checkpoint()).temperature
+    tuned, shipped = load_checkpoint(res.checkpoint), load_checkpoint(default_checkpoint())
+    assert isinstance(tuned, EnsembleClassifier) and isinstance(shipped, EnsembleClassifier)
+    assert tuned.metadata["held_out_after"] == res.after
+    assert [m.temperature for m in tuned.members] == [m.temperature for m in shipped.members]
+    assert all(m.metadata["split"] == "console-calibration" for m in tuned.members)
+
+    one = calibrate_takes(shipped_member, takes, tmp_path / "one.pt", epochs=1, threads=1)
+    clf = GestureClassifier.load(one.checkpoint)
+    assert clf.metadata["held_out_after"] == one.after and one.epochs == 1
+    assert clf.temperature == GestureClassifier.load(shipped_member).temperature

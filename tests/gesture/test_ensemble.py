@@ -70,3 +70,46 @@ def test_the_engine_runs_an_ensemble_named_by_comma_joined_checkpoints(
     assert any(
         a["confidence"] != b["confidence"] for a, b in zip(runs["ens"], runs["one"], strict=True)
     )
+
+
+def test_an_ensemble_file_holds_its_members_and_splits_back(laser_clips, tmp_path) -> None:
+    """`proxima ensemble join` writes one file that `load_checkpoint` reads as the same
+    ensemble (same probabilities); `split` writes the members back as one-model files;
+    a one-model loader refuses the ensemble by name, and a mixed set is refused."""
+    from typer.testing import CliRunner
+
+    from proxima.cli import app
+    from proxima.gesture.ensemble import load_checkpoint, save_ensemble
+
+    clip = next(c for c in laser_clips if c.gesture == "wave_off" and len(c) >= 80)
+    xyz = np.stack([clip.xyz[i : i + 60] for i in (0, 10, 20)])
+    joined = EnsembleClassifier.load(MEMBERS).predict(xyz, clip.aspect)
+    out = tmp_path / "ens.pt"
+    runner = CliRunner()
+    r = runner.invoke(app, ["ensemble", "join", *map(str, MEMBERS), "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    ens = load_checkpoint(out)
+    assert isinstance(ens, EnsembleClassifier) and len(ens.members) == 2
+    assert ens.metadata["members"] == [str(m) for m in MEMBERS]
+    assert ens.members[1].metadata == GestureClassifier.load(MEMBERS[1]).metadata
+    np.testing.assert_allclose(ens.predict(xyz, clip.aspect), joined, atol=1e-6)
+    with pytest.raises(ValueError, match=r"ens\.pt: an ensemble of 2 models"):
+        GestureClassifier.load(out)
+
+    r = runner.invoke(app, ["ensemble", "split", str(out), "--out-dir", str(tmp_path / "m")])
+    assert r.exit_code == 0, r.output
+    for i, src in enumerate(MEMBERS):
+        back = load_checkpoint(tmp_path / "m" / f"ens-m{i}.pt")
+        assert isinstance(back, GestureClassifier)
+        want = GestureClassifier.load(src).predict(xyz, clip.aspect)
+        np.testing.assert_allclose(back.predict(xyz, clip.aspect), want, atol=1e-6)
+    r = runner.invoke(app, ["ensemble", "split", str(MEMBERS[0]), "--out-dir", str(tmp_path)])
+    assert r.exit_code == 2 and "one model, not an ensemble" in r.output
+
+    short = GestureClassifier.load(MEMBERS[0])
+    short.window = 30
+    with pytest.raises(ValueError, match="window 30 / 60"):
+        save_ensemble(tmp_path / "bad.pt", [GestureClassifier.load(MEMBERS[1]), short], {})
+    with pytest.raises(ValueError, match="at least two members"):
+        save_ensemble(tmp_path / "bad.pt", [short], {})
+    assert not (tmp_path / "bad.pt").exists()

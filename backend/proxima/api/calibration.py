@@ -75,6 +75,8 @@ class CalibrationSession:
     state: str = "recording"
     detail: str = ""
     epoch: int = 0
+    member: int = 0  # which model of an ensemble is being fine-tuned (from 1)
+    members: int = 1  # the models fine-tuned one after the other (an ensemble's members)
     loss: float | None = None
     model: str = ""  # the checkpoint fine-tuned (the stream's model when training began)
     candidate: str = ""  # the fine-tuned checkpoint's path
@@ -287,6 +289,9 @@ class CalibrationManager:
         def progress(epoch: int, epochs: int, loss: float) -> None:
             session.epoch, session.loss = epoch, round(loss, 4)
 
+        def next_member(member: int, members: int) -> None:
+            session.member, session.members, session.epoch = member, members, 0
+
         result = calibrate_takes(
             session.model,
             takes,
@@ -300,6 +305,7 @@ class CalibrationManager:
                 "samples": [t.sample_id for t in session.takes.values()],
             },
             on_epoch=progress,
+            on_member=next_member,
         )
         session.before, session.after = result.before, result.after
         session.seconds = round(result.seconds, 1)

@@ -68,7 +68,7 @@ class ModelEvaluator:
             FileNotFoundError, ValueError: not a gesture checkpoint.
         """
         from proxima.evaluation.metrics import score_windows
-        from proxima.gesture.classifier import GestureClassifier
+        from proxima.gesture.ensemble import load_checkpoint
         from proxima.gesture.windows import make_windows
 
         path = Path(checkpoint)
@@ -76,7 +76,7 @@ class ModelEvaluator:
             key = self._key(path)
             if key in self._cache:
                 return self._cache[key]
-            clf = GestureClassifier.load(path)
+            clf = load_checkpoint(path)  # one model or an ensemble file
             clips = self._eval_clips()
             windows = make_windows(clips, clf.window, 5, 5)
             scored = score_windows(clf, windows, clips)

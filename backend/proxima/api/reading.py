@@ -14,17 +14,17 @@ _classifiers: dict[str, Any] = {}
 
 
 def classifier_at(path: str | Path) -> Any:
-    """The `GestureClassifier` of a checkpoint file, loaded once per path.
+    """The classifier of a checkpoint file (one model or an ensemble), loaded once per path.
 
     Raises:
         FileNotFoundError, ValueError: not a gesture checkpoint.
     """
-    from proxima.gesture.classifier import GestureClassifier
+    from proxima.gesture.ensemble import load_checkpoint
 
     key = str(path)
     with _lock:
         if key not in _classifiers:
-            _classifiers[key] = GestureClassifier.load(key)
+            _classifiers[key] = load_checkpoint(key)
         return _classifiers[key]
 
 

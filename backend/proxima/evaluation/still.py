@@ -67,9 +67,9 @@ def still_operator(checkpoint: str | Path, clips: Sequence[Clip]) -> dict[str, A
     Raises:
         FileNotFoundError, ValueError: the checkpoint is missing or not a checkpoint.
     """
-    from proxima.gesture.classifier import GestureClassifier
+    from proxima.gesture.ensemble import load_checkpoint
 
-    clf = GestureClassifier.load(checkpoint)
+    clf = load_checkpoint(checkpoint)
     control, settings = ControlSettings(), EngineSettings()
     stances = []
     for clip in clips:

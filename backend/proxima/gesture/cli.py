@@ -1,4 +1,5 @@
-"""`proxima train` and `proxima data fetch` (scoring a model is `proxima.evaluation.cli`)."""
+"""`proxima train`, `proxima ensemble join|split` and `proxima data fetch` (scoring a model
+is `proxima.evaluation.cli`)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import math
 import shlex
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NoReturn
 
 import typer
 
@@ -29,7 +30,7 @@ SplitOpt = Annotated[
 ]
 
 
-def _fail(exc: Exception) -> None:
+def _fail(exc: Exception) -> NoReturn:
     typer.secho(f"error: {exc}", fg="red", err=True)
     raise typer.Exit(2)
 
@@ -220,8 +221,55 @@ def fetch(
     typer.echo(f"{name}: {path}")
 
 
+def join(
+    members: Annotated[list[Path], typer.Argument(help="one-model checkpoints (two or more)")],
+    out: Annotated[Path, typer.Option(help="the ensemble file to write")],
+) -> None:
+    """Join one-model checkpoints into one ensemble file: the mean of their calibrated
+    probabilities (what the shipped model is). Each member keeps its own metadata."""
+    from proxima.gesture.classifier import GestureClassifier
+    from proxima.gesture.ensemble import save_ensemble
+
+    try:
+        models = [GestureClassifier.load(m) for m in members]
+        path = save_ensemble(out, models, {
+            "command": shlex.join(["proxima", *sys.argv[1:]]),
+            "members": [str(m) for m in members],
+        })  # fmt: skip
+    except (FileNotFoundError, ValueError) as exc:
+        _fail(exc)
+    typer.echo(f"saved {path} ({path.stat().st_size / 1024:.0f} KiB): {len(models)} members")
+
+
+def split(
+    ensemble: Annotated[Path, typer.Argument(help="an ensemble file")],
+    out_dir: Annotated[Path, typer.Option(help="folder for the members' files")],
+) -> None:
+    """Write an ensemble file's members as one-model checkpoints (STEM-m0.pt, STEM-m1.pt,
+    ...), e.g. to start a training or a federated run from one of them."""
+    from proxima.gesture.classifier import write_blob
+    from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
+
+    try:
+        clf = load_checkpoint(ensemble)
+    except (FileNotFoundError, ValueError) as exc:
+        _fail(exc)
+    if not isinstance(clf, EnsembleClassifier):
+        _fail(ValueError(f"{ensemble}: one model, not an ensemble"))
+    for i, m in enumerate(clf.members):
+        path = write_blob(out_dir / f"{ensemble.stem}-m{i}.pt", m.blob())
+        typer.echo(f"saved {path}")
+
+
 def register(app: typer.Typer) -> None:
     app.command()(train)
+    ensemble_app = typer.Typer(
+        help="Ensembles: several models in one file, their probabilities averaged.",
+        no_args_is_help=True,
+    )
+    ensemble_app.command()(join)
+    ensemble_app.command()(split)
+    app.add_typer(ensemble_app, name="ensemble")
     data_app = typer.Typer(help="Data sets: fetch them for offline use.", no_args_is_help=True)
     data_app.command()(fetch)
     app.add_typer(data_app, name="data")

@@ -96,16 +96,25 @@ def calibrate_takes(
     threads: int = 2,
     metadata: dict[str, Any] | None = None,
     on_epoch: Callable[[int, int, float], None] | None = None,
+    on_member: Callable[[int, int], None] | None = None,
 ) -> CalibrationResult:
     """Fine-tune `checkpoint` on the training parts of `takes` and save it at `out`;
-    score it before and after on their held-out parts. `on_epoch(epoch, epochs, loss)`
-    reports progress.
+    score it before and after on their held-out parts. An ensemble (the shipped model)
+    has each member fine-tuned the same way, one after the other, and is saved as an
+    ensemble. `on_member(i, members)` says which member starts (from 1),
+    `on_epoch(epoch, epochs, loss)` reports each member's epochs.
 
     Raises:
         DataError: a take too short, or no training windows.
         ValueError, FileNotFoundError: `checkpoint` is not a gesture checkpoint.
     """
-    from proxima.gesture.classifier import GestureClassifier, save_checkpoint
+    from proxima.gesture.classifier import save_checkpoint
+    from proxima.gesture.ensemble import (
+        EnsembleClassifier,
+        load_checkpoint,
+        members_of,
+        save_ensemble,
+    )
     from proxima.gesture.robust import CaptureSource, history_rows
     from proxima.gesture.train import EpochLog, TrainConfig, fit
     from proxima.gesture.workflow import FINE_TUNE_LR
@@ -118,7 +127,7 @@ def calibrate_takes(
         a, b = split_take(take)
         train_parts.append(a)
         held_parts.append(b)
-    clf = GestureClassifier.load(checkpoint)
+    clf = load_checkpoint(checkpoint)
     before = score(clf, held_parts)
     cfg = TrainConfig(
         epochs=epochs, seed=seed, threads=threads, stride=TRAIN_STRIDE, window=clf.window
@@ -135,15 +144,23 @@ def calibrate_takes(
         if on_epoch:
             on_epoch(log.epoch, epochs, log.train_loss)
 
-    history = fit(clf.model, clf.pipeline, fit_w, None, tune, report, None, source, None)
-    clf.model.eval()
+    members = members_of(clf)
+    losses: list[float] = []
+    runs = 0
+    for i, member in enumerate(members, 1):
+        if on_member:
+            on_member(i, len(members))
+        history = fit(member.model, member.pipeline, fit_w, None, tune, report, None, source, None)
+        member.model.eval()
+        losses += [h.train_loss for h in history]
+        runs = len(history)
     after = score(clf, held_parts)
     meta = {
         **(metadata or {}),
         "split": "console-calibration",
         "init": str(checkpoint),
         "train_config": tune.to_dict(),
-        "epochs_run": len(history),
+        "epochs_run": runs,
         "train_windows": len(fit_w),
         "calibration_takes": [t.name for t in takes],
         "holdout_fraction": HOLDOUT_FRACTION,
@@ -151,7 +168,12 @@ def calibrate_takes(
         "held_out_after": after,
         "test_accuracy": after["accuracy"],
     }
-    path = save_checkpoint(out, clf.model, clf.model_name, clf.pipeline, clf.window, meta,
-                           clf.temperature)  # fmt: skip
-    return CalibrationResult(path, before, after, len(history), len(fit_w),
-                             time.perf_counter() - t0, [h.train_loss for h in history])  # fmt: skip
+    if isinstance(clf, EnsembleClassifier):
+        for member in members:  # each member's own record says it was tuned, and where
+            member.metadata = {**member.metadata, "split": meta["split"], "init": str(checkpoint)}
+        path = save_ensemble(out, members, meta)
+    else:
+        path = save_checkpoint(out, clf.model, clf.model_name, clf.pipeline, clf.window, meta,
+                               clf.temperature)  # fmt: skip
+    return CalibrationResult(path, before, after, runs, len(fit_w),
+                             time.perf_counter() - t0, losses)  # fmt: skip

@@ -213,10 +213,13 @@ function renderTraining() {
   box.hidden = !calib || calib.state === "recording";
   if (box.hidden) return;
   const bar = q("progress.train-progress");
-  bar.max = calib.epochs;
-  bar.value = calib.epoch;
+  // an ensemble's members are fine-tuned one after the other: the bar counts all their epochs
+  const members = calib.members || 1;
+  bar.max = calib.epochs * members;
+  bar.value = Math.max(0, (calib.member || 1) - 1) * calib.epochs + calib.epoch;
+  const which = members > 1 ? `model ${calib.member} of ${members}, ` : "";
   const texts = {
-    training: [`Fine-tuning ${short(calib.model)} on the takes: epoch ${calib.epoch} of ${calib.epochs}${calib.loss !== null ? `, loss ${calib.loss.toFixed(3)}` : ""}…`, "warn"],
+    training: [`Fine-tuning ${short(calib.model)} on the takes: ${which}epoch ${calib.epoch} of ${calib.epochs}${calib.loss !== null ? `, loss ${calib.loss.toFixed(3)}` : ""}…`, "warn"],
     trained: [`Trained in ${calib.seconds} s: ${calib.candidate}.`, "ok"],
     failed: [`Training failed: ${calib.detail}. The takes are kept; train again or redo a take.`, "error"],
     promoted: [`${calib.candidate} runs on ${calib.stream} (promoted by ${calib.promoted_by}).`, "ok"],

@@ -64,6 +64,8 @@ def _out(console: Console, s: CalibrationSession) -> dict[str, Any]:
         "state": s.state,
         "detail": s.detail,
         "epoch": s.epoch,
+        "member": s.member,
+        "members": s.members,
         "loss": s.loss,
         "takes": takes,
         "done": sum(1 for t in s.takes.values() if t.sample_id is not None),
