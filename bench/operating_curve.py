@@ -5,14 +5,17 @@ condition; recognitions cached as that bench caches them).
     python -m bench.operating_curve --whole-stream-capture \
         --curve w30=runs/window/w30-s0.pt,runs/window/w30-s1.pt,runs/window/w30-s2.pt \
         --curve 'w30x3=runs/window/w30-s0.pt+runs/window/w30-s1.pt+runs/window/w30-s2.pt' \
-        --thresholds 12,14,16,18,20 --out bench/results/operating_curve.json
+        --thresholds 12,14,16,18,20 --out bench/results/operating_curve.json \
+        [--set 'confirm_by_command={"land": 3}']
 
 A curve is LABEL=MODEL,MODEL,...: its figures pool the models' streams (a seed's hours
 each). A MODEL of `+`-joined checkpoints is their ensemble, the mean of the members'
 calibrated probabilities, which is what the engine runs for `--checkpoint a.pt,b.pt`
 (`gesture.ensemble`), here taken from each member's cached recognitions. Every other
 decision setting is the shipped default, and `have_command`'s threshold keeps its
-default share of the base threshold (17.5 of 20). The PNG beside the JSON plots, per
+default share of the base threshold (17.5 of 20); `--set FIELD=JSON` sets a field at
+every point, over those (a table entry by entry: `evidence_threshold_by_command=
+'{"have_command": 14}'` holds arming at 14 nats). The PNG beside the JSON plots, per
 condition, the commands the script asks for that were given against the wrong commands
 that act on a drone (motions, landings, aborts) per hour.
 """
@@ -20,6 +23,7 @@ that act on a drone (motions, landings, aborts) per hour.
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -61,9 +65,12 @@ def ensemble_sets(members: list[str], args: argparse.Namespace) -> dict[str, tup
     return out
 
 
-def curve(sets: list[tuple], thresholds: list[float]) -> list[dict[str, Any]]:
-    """One row per base threshold: per condition the commands by the script, the wrong
-    commands split by what they do, the hours and the median and p95 latency."""
+def curve(
+    sets: list[tuple], thresholds: list[float], extra: dict[str, Any] | None = None
+) -> list[dict[str, Any]]:
+    """One row per base threshold (with `extra`'s settings): per condition the commands by
+    the script, the wrong commands split by what they do, the hours and the median and
+    p95 latency."""
     base = ControlSettings()
     share = base.evidence_threshold_by_command["have_command"] / base.evidence_threshold
     hours = {  # unrounded: check() rounds its hours to 0.01
@@ -72,10 +79,13 @@ def curve(sets: list[tuple], thresholds: list[float]) -> list[dict[str, Any]]:
     rows = []
     for th in thresholds:
         # `variant` keeps the table's other entries
-        update = {
+        update: dict[str, Any] = {
             "evidence_threshold": th,
             "evidence_threshold_by_command": {"have_command": share * th},
         }
+        for key, value in (extra or {}).items():  # `extra` wins, a table entry by entry
+            old = update.get(key)
+            update[key] = {**old, **value} if isinstance(old, dict) else value
         out = check(sets, variant(update))
         row: dict[str, Any] = {"threshold": th}
         for cond in CONDITIONS:
@@ -126,18 +136,24 @@ def main() -> None:
     )  # fmt: skip
     ap.add_argument("--thresholds", default="12,14,16,18,20")
     ap.add_argument("--out", type=Path, default=Path("bench/results/operating_curve.json"))
+    ap.add_argument(
+        "--set", action="append", default=[], metavar="FIELD=JSON",
+        help="another ControlSettings field at every point (JSON value)",
+    )  # fmt: skip
     add_stream_args(ap)
     ap.set_defaults(tune_streams=0, streams=48)
     args = ap.parse_args()
     t0 = time.perf_counter()
     thresholds = [float(t) for t in args.thresholds.split(",")]
+    extra = {k: json.loads(v) for k, _, v in (item.partition("=") for item in args.set)}
     result: dict[str, list[dict[str, Any]]] = {}
     for spec in args.curve:
         label, _, models = spec.partition("=")
         log(f"{label}:")
         sets = [(None, ensemble_sets(m.split("+"), args)) for m in models.split(",")]
-        result[label] = curve(sets, thresholds)
-    write_doc(args.out, "operating_curve", "operating_curve", {"curves": result}, t0)
+        result[label] = curve(sets, thresholds, extra)
+    doc = {"curves": result, "settings": extra}
+    write_doc(args.out, "operating_curve", "operating_curve", doc, t0)
     plot(result, args.out.with_suffix(".png"))
 
 
