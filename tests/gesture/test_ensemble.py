@@ -113,3 +113,24 @@ def test_an_ensemble_file_holds_its_members_and_splits_back(laser_clips, tmp_pat
     with pytest.raises(ValueError, match="at least two members"):
         save_ensemble(tmp_path / "bad.pt", [short], {})
     assert not (tmp_path / "bad.pt").exists()
+
+
+def test_a_broken_ensemble_file_is_refused_by_name(tmp_path) -> None:
+    """A member with a field missing, or no members, is a clear error naming the file
+    and the member, never a crash."""
+    import torch
+
+    from proxima.gesture.classifier import ENSEMBLE_FORMAT
+    from proxima.gesture.ensemble import load_checkpoint
+
+    good = GestureClassifier.load(MEMBERS[0]).blob()
+    broken = {k: v for k, v in good.items() if k != "state_dict"}
+    path = tmp_path / "broken.pt"
+    torch.save({"format": ENSEMBLE_FORMAT, "members": [good, broken], "metadata": {}}, path)
+    with pytest.raises(ValueError, match=r"broken\.pt member 1: a malformed .*state_dict"):
+        load_checkpoint(path)
+    torch.save({"format": ENSEMBLE_FORMAT, "metadata": {}}, path)
+    with pytest.raises(ValueError, match="without its members"):
+        load_checkpoint(path)
+    with pytest.raises(ValueError, match="an ensemble of 0 models"):
+        GestureClassifier.load(path)

@@ -153,9 +153,10 @@ class GestureClassifier:
         """
         path, blob = read_blob(path)
         if blob["format"] == ENSEMBLE_FORMAT:
+            n = len(blob.get("members") or [])
             raise ValueError(
-                f"{path}: an ensemble of {len(blob['members'])} models, where one model is "
-                "needed; `proxima ensemble split` writes its members as files"
+                f"{path}: an ensemble of {n} models, where one model is needed; "
+                "`proxima ensemble split` writes its members as files"
             )
         return cls.from_blob(blob, path)
 
@@ -164,10 +165,18 @@ class GestureClassifier:
         """The classifier of one model's checkpoint contents (`path` names it in errors).
 
         Raises:
-            ValueError: features or temperature that do not fit.
+            ValueError: a field missing or malformed, features or temperature that do not fit.
         """
-        if blob.get("format") != FORMAT:
+        if not isinstance(blob, dict) or blob.get("format") != FORMAT:
             raise ValueError(f"{path}: not a Proxima gesture model (format {FORMAT})")
+        try:
+            return cls._from_fields(blob, path)
+        except (KeyError, TypeError, RuntimeError) as exc:  # RuntimeError: weights not fitting
+            why = f"{type(exc).__name__}: {exc}"
+            raise ValueError(f"{path}: a malformed checkpoint ({why})") from exc
+
+    @classmethod
+    def _from_fields(cls, blob: dict[str, Any], path: str | Path) -> GestureClassifier:
         model = build_model(blob["model"], **blob["config"])
         pipeline = make_pipeline(blob["pipeline"]["name"], blob["pipeline"]["state"])
         expected = blob["config"].get("num_features")
