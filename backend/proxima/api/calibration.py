@@ -251,6 +251,7 @@ class CalibrationManager:
         if not self._train_lock.acquire(blocking=False):
             raise CalibrationError("another calibration is training: try again when it is done")
         session.state, session.detail, session.epoch, session.loss = "training", "", 0, None
+        session.member = 0  # set as each model of the checkpoint starts (`next_member`)
         session.before = session.after = None
         session.candidate = ""
         thread = threading.Thread(target=self._train, args=(session,), daemon=True,
