@@ -46,15 +46,20 @@ SINGLE_THRESHOLD = ControlSettings(
 )
 
 
-def variant(update: dict[str, Any]) -> ControlSettings:
-    """The defaults with `update`'s fields; a table (e.g. `evidence_threshold_by_command`)
-    is updated entry by entry, not replaced."""
-    base = ControlSettings().model_dump()
+def merged(base: dict[str, Any], update: dict[str, Any]) -> dict[str, Any]:
+    """`base` with `update`'s fields; a table (e.g. `evidence_threshold_by_command`) is
+    updated entry by entry, not replaced."""
+    out = dict(base)
     for key, value in update.items():
-        if isinstance(value, dict) and isinstance(base.get(key), dict):
-            value = {**base[key], **value}
-        base[key] = value
-    return ControlSettings.model_validate(base)
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            value = {**out[key], **value}
+        out[key] = value
+    return out
+
+
+def variant(update: dict[str, Any]) -> ControlSettings:
+    """The defaults with `update`'s fields, tables entry by entry (`merged`)."""
+    return ControlSettings.model_validate(merged(ControlSettings().model_dump(), update))
 
 
 def settings_of(

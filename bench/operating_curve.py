@@ -32,7 +32,7 @@ from typing import Any
 import matplotlib
 import numpy as np
 
-from bench.decision_check import check, variant
+from bench.decision_check import check, merged, variant
 from bench.robust_training import log, recognised_streams, write_doc
 from bench.window_length import add_stream_args, cache_path
 from proxima.control import ControlSettings
@@ -79,13 +79,11 @@ def curve(
     rows = []
     for th in thresholds:
         # `variant` keeps the table's other entries
-        update: dict[str, Any] = {
+        point = {
             "evidence_threshold": th,
             "evidence_threshold_by_command": {"have_command": share * th},
         }
-        for key, value in (extra or {}).items():  # `extra` wins, a table entry by entry
-            old = update.get(key)
-            update[key] = {**old, **value} if isinstance(old, dict) else value
+        update = merged(point, extra or {})  # `extra` wins, a table entry by entry
         out = check(sets, variant(update))
         row: dict[str, Any] = {"threshold": th}
         for cond in CONDITIONS:

@@ -44,7 +44,7 @@ from proxima.evaluation.robust_training import (
 )
 from proxima.gesture.capture import condition
 from proxima.gesture.datasets import load_data
-from proxima.gesture.ensemble import EnsembleClassifier
+from proxima.gesture.ensemble import members_of
 from proxima.gesture.windows import WINDOW, split_clips
 
 CONDITIONS = {
@@ -61,7 +61,7 @@ def log(msg: str) -> None:
 
 def temperatures(clf: Any) -> list[float]:
     """The softmax temperature of each member (one for a single checkpoint)."""
-    return [m.temperature for m in (clf.members if isinstance(clf, EnsembleClassifier) else [clf])]
+    return [m.temperature for m in members_of(clf)]
 
 
 def windows_cmd(args: argparse.Namespace) -> dict:

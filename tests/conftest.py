@@ -87,7 +87,7 @@ def small_checkpoint(tmp_path_factory, laser_dir: Path) -> Path:
 
 
 @pytest.fixture(scope="session")
-def degraded_checkpoint(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def degraded_checkpoint(tmp_path_factory: pytest.TempPathFactory, shipped_member: Path) -> Path:
     """The shipped ensemble's first member with Gaussian noise (half each tensor's
     spread, seed 0) on its weights: a real one-model checkpoint the engine runs,
     measurably worse (0.48 against the shipped ensemble's 0.85 window accuracy on the
@@ -95,10 +95,7 @@ def degraded_checkpoint(tmp_path_factory: pytest.TempPathFactory) -> Path:
     for a poorly trained candidate (a federated run's model) in promotion tests."""
     import torch
 
-    from proxima.gesture.classifier import default_checkpoint
-
-    blob = torch.load(default_checkpoint(), map_location="cpu", weights_only=True)
-    member = blob["members"][0]
+    member = torch.load(shipped_member, map_location="cpu", weights_only=True)
     gen = torch.Generator().manual_seed(0)
     for k, v in member["state_dict"].items():
         if v.is_floating_point() and v.numel() > 1:

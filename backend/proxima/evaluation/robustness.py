@@ -49,7 +49,7 @@ from proxima.evaluation.stitch import StitchedStream
 from proxima.gesture.capture import EFFECTS, CaptureModel, condition, live_windows
 from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.clip import Clip
-from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
+from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint, members_of
 from proxima.types import GESTURES
 
 CONDITION_NAMES = (*EFFECTS, "field")  # what `conditions` may name (clean always runs)
@@ -175,7 +175,7 @@ def score_condition(
 
     if not len(windows["labels"]):
         return {"windows": 0, "accuracy": None, "macro_f1": None}
-    members = clf.members if isinstance(clf, EnsembleClassifier) else [clf]
+    members = members_of(clf)
     order = np.concatenate([np.flatnonzero(windows["has_z"] == hz) for hz in (True, False)])
     probs = np.zeros((len(order), len(clf.labels)), np.float32)
     for m in members:
