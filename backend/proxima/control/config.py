@@ -60,8 +60,10 @@ class ControlSettings(BaseModel):
     17.5), and checked on 12 h of their evaluation streams (`bench/decision_check.py`):
     under `field` 79 % of commands with 1.0 wrong per hour, where the morning's 16 nats
     and half-life 1 s gave 80 % with 2.0 (docs/recognition.md). `have_command` went to 12
-    with the shipped ensemble (`EVIDENCE_BY_COMMAND`). `AVERAGE_RULE` below is the moving
-    average as it was tuned (the default until 2026-12-05).
+    with the shipped ensemble of three (`EVIDENCE_BY_COMMAND`), the base threshold to 18
+    with five members, whose mean passes fewer wrong readings (docs/experiments.md,
+    "Thirtieth session"). `AVERAGE_RULE` below is the moving average as it was tuned (the
+    default until 2026-12-05).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -82,7 +84,7 @@ class ControlSettings(BaseModel):
         "disarm) is safe to give on less evidence, and missing it is not",
     )
     evidence_threshold: float = Field(
-        20.0, gt=0.0, description="evidence rule: summed log-odds (nats) an action needs"
+        18.0, gt=0.0, description="evidence rule: summed log-odds (nats) an action needs"
     )
     evidence_threshold_by_command: ThresholdByEvidence = Field(
         default_factory=lambda: dict(EVIDENCE_BY_COMMAND),
