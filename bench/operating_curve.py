@@ -13,7 +13,8 @@ each). A MODEL of `+`-joined checkpoints is their ensemble, the mean of the memb
 calibrated probabilities, which is what the engine runs for `--checkpoint a.pt,b.pt`
 (`gesture.ensemble`), here taken from each member's cached recognitions. Every other
 decision setting is the shipped default, and `have_command`'s threshold keeps its
-default share of the base threshold (17.5 of 20); `--set FIELD=JSON` sets a field at
+default share of the base threshold (12 of 18 since 2026-12-06's five members; 12 of 20
+before, so files made earlier that day used 0.6); `--set FIELD=JSON` sets a field at
 every point, over those (a table entry by entry: `evidence_threshold_by_command=
 '{"have_command": 14}'` holds arming at 14 nats). The PNG beside the JSON plots, per
 condition, the commands the script asks for that were given against the wrong commands

@@ -152,7 +152,7 @@ def test_calibrating_on_takes_scores_before_and_after(
 ) -> None:  # type: ignore[no-untyped-def]
     """The shipped ensemble has each member fine-tuned and stays an ensemble; one model
     stays one model. Both keep their temperatures."""
-    from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint, members_of
+    from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint
 
     takes = [
         next(c for c in laser_clips if c.gesture == g and c.view == "r").slice(20, 230)
@@ -169,12 +169,12 @@ def test_calibrating_on_takes_scores_before_and_after(
         on_epoch=lambda e, n, loss: seen.append((member[0], e)),
         on_member=lambda i, n: member.__setitem__(0, i),
     )
-    n = len(members_of(load_checkpoint(default_checkpoint())))
+    tuned, shipped = load_checkpoint(res.checkpoint), load_checkpoint(default_checkpoint())
+    assert isinstance(tuned, EnsembleClassifier) and isinstance(shipped, EnsembleClassifier)
+    n = len(shipped.members)
     assert seen == [(i, e) for i in range(1, n + 1) for e in (1, 2)] and res.epochs == 2
     assert set(res.before["per_gesture"]) == set(res.after["per_gesture"]) == set(GESTURES)
     assert res.before["windows"] == res.after["windows"] > 0
-    tuned, shipped = load_checkpoint(res.checkpoint), load_checkpoint(default_checkpoint())
-    assert isinstance(tuned, EnsembleClassifier) and isinstance(shipped, EnsembleClassifier)
     assert tuned.metadata["held_out_after"] == res.after
     assert [m.temperature for m in tuned.members] == [m.temperature for m in shipped.members]
     assert all(m.metadata["split"] == "console-calibration" for m in tuned.members)

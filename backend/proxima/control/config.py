@@ -35,11 +35,9 @@ ThresholdByEvidence = Annotated[
 ]
 DecisionRule = Literal["average", "evidence"]
 # The evidence rule's per-command thresholds (nats; the rest need `evidence_threshold`):
-# arming alone moves no drone, and the side views name have_command at 0.6-0.9. 12 with
-# the shipped ensemble: over 10 h of held-out streams per condition it gives 6 points
-# more of the commands asked for under `field` than 17.5 (3 clean), with 6 wrong commands
-# that act against 4 and 2 wrong armings against 0; one model at 17.5, the default before
-# the ensemble, gave 1.4 acting per hour (docs/experiments.md, "Twenty-ninth session")
+# arming alone moves no drone, and the side views name have_command at 0.6-0.9; 12 with
+# the shipped ensemble gives 6 points more of the commands asked for under `field` than
+# 17.5 for 2 more wrong acting commands in 10 h (docs/experiments.md, "Twenty-ninth session")
 EVIDENCE_BY_COMMAND = {"have_command": 12.0}
 # Its per-command odds weights: doubt between have_command (while armed a re-arm, which
 # moves no drone) and a motion goes to the former; measured over 30 h of held-out
@@ -53,17 +51,13 @@ class ControlSettings(BaseModel):
     """How recognitions become commands.
 
     The paper averages three recognitions and waits 10 s between commands (10.4 s
-    response). The default is the evidence rule at the one setting chosen for the three
-    held-out 30-frame seeds on 6 h of their tuning streams captured as a drone camera
-    delivers them, 15-30 fps (`bench/evidence_retune.py --tune-streams 24
-    --whole-stream-capture`: 20 nats, half-life 2 s, clip 3, one decision, `have_command`
-    17.5), and checked on 12 h of their evaluation streams (`bench/decision_check.py`):
-    under `field` 79 % of commands with 1.0 wrong per hour, where the morning's 16 nats
-    and half-life 1 s gave 80 % with 2.0 (docs/recognition.md). `have_command` went to 12
-    with the shipped ensemble of three (`EVIDENCE_BY_COMMAND`), the base threshold to 18
-    with five members, whose mean passes fewer wrong readings (docs/experiments.md,
-    "Thirtieth session"). `AVERAGE_RULE` below is the moving average as it was tuned (the
-    default until 2026-12-05).
+    response). The default is the evidence rule: half-life 2 s, clip 3, one decision,
+    tuned for the held-out 30-frame seeds on streams captured at 15-30 fps
+    (`bench/evidence_retune.py`, checked with `bench/decision_check.py`), with the base
+    threshold at 18 nats and `have_command` at 12 since the shipped model is an ensemble
+    of five seeds, whose mean passes fewer wrong readings (`bench/operating_curve.py`;
+    docs/recognition.md, docs/experiments.md "Thirtieth session"). `AVERAGE_RULE` below
+    is the moving average as it was tuned (the default until 2026-12-05).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
