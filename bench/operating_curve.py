@@ -16,9 +16,11 @@ decision setting is the shipped default, and `have_command`'s threshold keeps it
 default share of the base threshold (12 of 18 since 2026-12-06's five members; 12 of 20
 before, so files made earlier that day used 0.6); `--set FIELD=JSON` sets a field at
 every point, over those (a table entry by entry: `evidence_threshold_by_command=
-'{"have_command": 14}'` holds arming at 14 nats). The PNG beside the JSON plots, per
-condition, the commands the script asks for that were given against the wrong commands
-that act on a drone (motions, landings, aborts) per hour.
+'{"have_command": 14}'` holds arming at 14 nats; `evidence_bridged_weight=1` counts windows
+across a bridged pause in full). `--max-gap 0.25` recognises the streams with the window
+restarting after a pause over 0.25 s, as the engine did until 2026-12-06. The PNG
+beside the JSON plots, per condition, the commands the script asks for that were given
+against the wrong commands that act on a drone (motions, landings, aborts) per hour.
 """
 
 from __future__ import annotations

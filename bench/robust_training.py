@@ -91,7 +91,8 @@ def recognised_streams(checkpoint: str, args: argparse.Namespace, cache: Path | 
         return pickle.loads(cache.read_bytes())
     clips = load_data(["laser"]).clips
     clf = load_classifier(checkpoint)  # comma-joined: their ensemble
-    settings = EngineSettings()
+    gap = getattr(args, "max_gap", None)  # `streams` has no such option
+    settings = EngineSettings() if gap is None else EngineSettings(max_gap_s=gap)
     tune_sets, eval_sets = {}, {}
     whole = getattr(args, "whole_stream_capture", False)  # `streams` has no such option
     for key, model in {"clean": condition("clean"), "field1": condition("field", 1)}.items():

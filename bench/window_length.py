@@ -37,6 +37,7 @@ from proxima.engine import load_classifier
 from proxima.evaluation.latency import evaluate_config, rank
 from proxima.evaluation.metrics import evaluate_checkpoint
 from proxima.evaluation.robust_training import pool, summary_row, tune_evidence
+from proxima.gesture.capture import MAX_GAP_S
 
 EVIDENCE_KEYS = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
 HEADLINE = ("hit_rate", "on_time_rate", "latency_median_s", "latency_p95_s", "wrong", "repeats")
@@ -45,10 +46,13 @@ VIEWS = "flr"  # decision_streams deals the views f, l, r in turn
 
 def cache_path(checkpoint: str, args: argparse.Namespace) -> Path:
     """`recs-<stem>.pkl` for the default streams; other stream options name their own
-    file, so a cache is never read for streams it does not hold."""
+    file, so a cache is never read for streams it does not hold. The engine's pause
+    limit too: caches made while it was 0.25 s carry no mark, others `-gapS`."""
     sizes = (args.tune_streams, args.streams, args.segments)
     tail = "" if sizes == (6, 12, 30) else "-t{}-e{}-g{}".format(*sizes)
     tail += "-whole" if args.whole_stream_capture else ""
+    gap = getattr(args, "max_gap", None) or MAX_GAP_S
+    tail += f"-gap{gap:g}" if gap != 0.25 else ""
     return args.cache_dir / f"recs-{Path(checkpoint).stem}{tail}.pkl"
 
 
@@ -130,6 +134,9 @@ def add_stream_args(ap: argparse.ArgumentParser) -> None:
                     help="capture each stitched stream in one draw at the drawn frame rate "
                     "(15-30 fps under field), as proxima robustness does; default: each "
                     "clip at 30 fps")  # fmt: skip
+    ap.add_argument("--max-gap", type=float, default=None, metavar="S",
+                    help="the engine's max_gap_s for the recognitions (default: the "
+                    "engine's; 0.25: the window restarts as it did until 2026-12-06)")  # fmt: skip
 
 
 def held_out_sets(checkpoints: list[str], args: argparse.Namespace) -> list[tuple]:

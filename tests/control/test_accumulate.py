@@ -157,3 +157,22 @@ def test_a_prior_weight_multiplies_a_gestures_odds_and_settles_doubt_towards_it(
         ControlSettings(evidence_prior_by_command={"have_comand": 2.0})
     rule = decision_filter(ControlSettings(evidence_prior_by_command={"have_command": 2.0}), labels)
     assert isinstance(rule, EvidenceAccumulator) and rule.prior == {"have_command": 2.0}
+
+
+def test_a_window_across_a_bridged_pause_adds_part_of_its_evidence() -> None:
+    labels = ("a", "b", "c")
+    p = np.array([0.8, 0.1, 0.1])  # log 4 = 1.39 nats per 1/6 s
+    full = EvidenceAccumulator(labels, threshold=100.0, half_life_s=1e9)
+    half = EvidenceAccumulator(labels, threshold=100.0, half_life_s=1e9, bridged_weight=0.5)
+    for k, bridged in enumerate([False, True, True, False]):
+        full.update(k / 6, p, bridged)
+        half.update(k / 6, p, bridged)
+    assert full.score[0] == pytest.approx(4 * np.log(4.0))
+    assert half.score[0] == pytest.approx(3 * np.log(4.0))  # 1 + 0.5 + 0.5 + 1 windows
+    # the shipped setting, through decide_window as the stream pipeline calls it
+    rule = decision_filter(ControlSettings(), labels)
+    assert isinstance(rule, EvidenceAccumulator) and rule.bridged_weight == 0.5
+    decide_window(rule, 0.0, p, [], bridged=True)
+    assert rule.score[0] == pytest.approx(0.5 * np.log(4.0))
+    with pytest.raises(ValueError, match="bridged weight"):
+        EvidenceAccumulator(labels, bridged_weight=1.5)

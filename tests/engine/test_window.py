@@ -1,6 +1,8 @@
 """The sliding pose window: stride and restarts at gaps, on real dataset poses."""
 
 from proxima.engine import PoseWindow
+from proxima.engine.config import EngineSettings
+from proxima.gesture.capture import MAX_GAP_S
 from proxima.types import Pose
 
 
@@ -33,6 +35,32 @@ def test_a_gap_restarts_the_window(laser_clips) -> None:
     restarted = [w.push(p) for p in poses(clip, range(r - 70, r + 1))]
     assert restarted[-1] and not any(restarted[:-1])
     assert len(w) == 1 and not w.due()
+
+
+def test_the_engine_bridges_a_moment_without_the_operator(laser_clips) -> None:
+    # The same 14-frame (0.47 s) loss: by default the window holds the poses on both
+    # sides and classification goes on at the stride, as a field camera needs.
+    clip = next(c for c in laser_clips if c.name == "DJI_0171_move_upward_r")
+    gaps = (clip.frames[1:] - clip.frames[:-1]) - 1
+    r = int((gaps > 7).nonzero()[0][0]) + 1
+    assert EngineSettings().max_gap_s == MAX_GAP_S == PoseWindow().max_gap_s
+    assert (clip.frames[r] - clip.frames[r - 1]) / 30 < MAX_GAP_S
+    w = PoseWindow(size=30, stride=5)
+    due = []
+    for i, p in enumerate(poses(clip, range(r - 40, r + 6))):
+        assert not w.push(p)
+        if w.due():
+            w.take()
+            due.append(i)
+    assert due == [29, 34, 39, 44] and w.restarts == 0
+    # while it holds a pause longer than training windows do, its readings count less
+    assert w.bridged() and w.longest_pause_s() > 0.45
+    for q in poses(clip, range(r + 6, r + 36)):
+        w.push(q)
+    assert not w.bridged()
+    # a pause longer than MAX_GAP_S still restarts it
+    later = Pose(t=q.t + MAX_GAP_S + 0.05, xyz=q.xyz, visibility=q.visibility)
+    assert w.push(later) and len(w) == 1
 
 
 def test_the_time_clock_gives_the_pose_clocks_windows_at_30_fps(laser_clips) -> None:

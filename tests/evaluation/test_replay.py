@@ -58,6 +58,22 @@ def test_the_offline_replay_decides_as_the_engine_when_the_operator_is_lost(
     assert offline.score(lost_stream).summary() == engine.score(lost_stream).summary()
 
 
+def test_a_moment_without_the_operator_is_bridged_and_its_windows_count_half(
+    laser_clips, shipped
+) -> None:
+    # 0.47 s without frames (a field camera losing the operator): the window goes on
+    # across the pause, and the windows that hold it are flagged for the evidence rule.
+    (stream,) = build_streams(laser_clips, [7], 8, "test", 3.0, 4.0)
+    apply_blank(stream, Blank(10.0, 10.45, "drop"))
+    control = ControlSettings()
+    rec = recognize(stream, shipped, EngineSettings(), control)
+    assert rec.bridged is not None and int(rec.new_window.sum()) == 1  # no restart
+    t = np.array([rec.updates[i].t for i in rec.classified])
+    assert rec.bridged.any() and np.all((t[rec.bridged] > 10.4) & (t[rec.bridged] < 11.5))
+    engine = engine_run(stream, control, EngineSettings(), shipped)
+    assert decisions(decide(rec, control)) == decisions(engine)
+
+
 @pytest.mark.parametrize(
     ("stride", "params"),
     [

@@ -13,6 +13,8 @@ import pytest
 
 from proxima.gesture.capture import (
     CONDITIONS,
+    MAX_GAP_S,
+    TRAIN_MAX_GAP_S,
     CaptureError,
     CaptureModel,
     condition,
@@ -189,12 +191,18 @@ def test_gaps_and_the_live_window_restart(hover_f) -> None:
     cap = model.apply_clip(hover_f, np.random.default_rng(9))
     pauses = np.diff(cap.t)
     assert (pauses > 0.45).sum() >= 3  # gaps happened
-    xyz, vis, end = live_windows(cap, size=60, stride=5)
-    assert len(xyz) > 0 and xyz.shape[1:] == (60, 33, 3) and vis.shape[1:] == (60, 33)
     index = {round(t, 6): i for i, t in enumerate(cap.t)}
-    for e in end:
-        i = index[round(float(e), 6)]
-        assert np.all(np.diff(cap.t[i - 59 : i + 1]) <= 0.25 + 1e-9)  # never across a pause
+
+    def longest_pauses(**max_gap: float) -> list[float]:
+        xyz, vis, end = live_windows(cap, size=60, stride=5, **max_gap)
+        assert len(xyz) > 0 and xyz.shape[1:] == (60, 33, 3) and vis.shape[1:] == (60, 33)
+        rows = [index[round(float(e), 6)] for e in end]
+        return [float(np.diff(cap.t[i - 59 : i + 1]).max()) for i in rows]
+
+    # the live window bridges half a second (MAX_GAP_S), a stricter one restarts there
+    bridged, strict = longest_pauses(), longest_pauses(max_gap_s=0.25)
+    assert 0.45 < max(bridged) <= MAX_GAP_S + 1e-9
+    assert max(strict) <= 0.25 + 1e-9 and len(strict) < len(bridged)
 
 
 def test_windows_at_a_lower_frame_rate_hold_every_third_row(hover_f) -> None:
@@ -218,14 +226,14 @@ def test_dropped_frames_in_windows_are_skipped_rows(hover_f, fps) -> None:
     step = round(30 / fps)
     skipped = False
     # Each pose is one source row (camera frames fall on rows here), in order, with
-    # skips, and no pause over 0.25 s (the live window would restart there).
+    # skips, and no pause over TRAIN_MAX_GAP_S (training windows keep to it).
     for n in range(len(out)):
         err = np.abs(out[n][:, None] - xyz[n][None]).max(axis=(2, 3))  # (60, S)
         rows = err.argmin(axis=1)
         assert err.min(axis=1).max() < 1e-6
         gaps = np.diff(rows)
         assert np.all(gaps % step == 0) and gaps.min() >= step
-        assert gaps.max() / 30 <= 0.25 + 1e-9
+        assert gaps.max() / 30 <= TRAIN_MAX_GAP_S + 1e-9
         skipped |= bool(gaps.max() > step)
         assert rows[-1] >= xyz.shape[1] - 1 - 7  # ends within a pause of the window's end
     assert skipped

@@ -17,6 +17,9 @@ per recognition: a recognition adds its log-odds times the seconds since the pre
 one over `REFERENCE_INTERVAL_S` (stride 5 at 30 fps, where the settings were tuned), so
 a 15 fps camera, with half the recognitions, arms as fast as a 30 fps one (counted per
 recognition it could never reach 16 nats: 3 a window at most, halving every second).
+A window that bridges a pause longer than training windows hold (`bridged`: the engine
+keeps its window across a moment without the operator, engine/window.py) adds
+`bridged_weight` of its evidence: the jump in it is outside what the model learned.
 The probabilities should be calibrated
 (the checkpoint's temperature, gesture/calibration.py) for the log-odds to mean what
 they say. The score empties after a pause of `reset_after_s` or on `reset()`.
@@ -45,7 +48,7 @@ class DecisionFilter(Protocol):
 
     def reset(self) -> None: ...
 
-    def update(self, t: float, probs: np.ndarray) -> FilteredAction: ...
+    def update(self, t: float, probs: np.ndarray, bridged: bool = False) -> FilteredAction: ...
 
     def withhold(self, labels: Sequence[str]) -> None: ...
 
@@ -62,12 +65,16 @@ class EvidenceAccumulator:
         reset_after_s: float = 1.0,
         thresholds: Mapping[str, float] | None = None,
         prior: Mapping[str, float] | None = None,
+        bridged_weight: float = 1.0,
     ) -> None:
         if threshold <= 0 or half_life_s <= 0 or clip <= 0:
             raise ValueError(
                 f"evidence rule: threshold, half-life and clip must be > 0, "
                 f"got {threshold}, {half_life_s}, {clip}"
             )
+        if not 0.0 <= bridged_weight <= 1.0:
+            raise ValueError(f"evidence rule: bridged weight must be 0..1, got {bridged_weight}")
+        self.bridged_weight = bridged_weight
         self.labels = tuple(labels)
         self.threshold = threshold
         self.thresholds = dict(thresholds or {})
@@ -92,6 +99,7 @@ class EvidenceAccumulator:
             control.filter_reset_s,
             control.evidence_threshold_by_command,
             control.evidence_prior_by_command,
+            control.evidence_bridged_weight,
         )
 
     def reset(self) -> None:
@@ -99,9 +107,10 @@ class EvidenceAccumulator:
         self.score = np.zeros(len(self.labels))
         self._last_t: float | None = None
 
-    def update(self, t: float, probs: np.ndarray) -> FilteredAction:
-        """Add one recognition (probabilities over `labels`) and decide. `confidence` is
-        the leading gesture's evidence as a share of its threshold (1 = it passes).
+    def update(self, t: float, probs: np.ndarray, bridged: bool = False) -> FilteredAction:
+        """Add one recognition (probabilities over `labels`; `bridged`: its window holds a
+        bridged pause) and decide. `confidence` is the leading gesture's evidence as a
+        share of its threshold (1 = it passes).
 
         Raises:
             ValueError: `probs` does not have one entry per label.
@@ -119,6 +128,8 @@ class EvidenceAccumulator:
         # the stream time this recognition stands for (the first: one reference interval);
         # rounded so that 30 fps at stride 5 weighs exactly 1
         weight = 1.0 if self._last_t is None else round(dt / REFERENCE_INTERVAL_S, 6)
+        if bridged:
+            weight *= self.bridged_weight
         self._last_t = t
         q = np.clip(weighed, P_FLOOR, 1.0 - P_FLOOR)
         llr = np.clip(np.log(q) - np.log1p(-q), -self.clip, self.clip)
@@ -137,11 +148,16 @@ class EvidenceAccumulator:
 
 
 def decide_window(
-    rule: DecisionFilter, t: float, probs: np.ndarray, withheld: Sequence[str]
+    rule: DecisionFilter,
+    t: float,
+    probs: np.ndarray,
+    withheld: Sequence[str],
+    bridged: bool = False,
 ) -> tuple[FilteredAction, str]:
-    """One recognition through `rule`; the gestures the window cannot tell (`withheld`)
-    are neither the action nor kept as evidence. Returns the decision and the action."""
-    decision = rule.update(t, probs)
+    """One recognition through `rule` (`bridged`: its window holds a bridged pause); the
+    gestures the window cannot tell (`withheld`) are neither the action nor kept as
+    evidence. Returns the decision and the action."""
+    decision = rule.update(t, probs, bridged)
     rule.withhold(withheld)
     return decision, "" if decision.action in withheld else decision.action
 

@@ -100,6 +100,14 @@ class ControlSettings(BaseModel):
         description="evidence rule: most log-odds one recognition adds or takes per 1/6 s "
         "of stream (it weighs the seconds since the previous one)",
     )
+    evidence_bridged_weight: float = Field(
+        0.5,
+        ge=0.0,
+        le=1.0,
+        description="evidence rule: share of its evidence a window adds when it holds a "
+        "pause the engine bridged (longer than training windows hold, 0.25 s): at 1, "
+        "bridging gave 3 times the wrong commands under `field`",
+    )
     confirm: int = Field(
         1, ge=1, description="consecutive filtered decisions that must agree before a command"
     )

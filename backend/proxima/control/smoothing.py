@@ -72,8 +72,9 @@ class MovingAverageFilter:
         self._history.clear()
         self._last_t = None
 
-    def update(self, t: float, probs: np.ndarray) -> FilteredAction:
-        """Add one recognition (probabilities over `labels`) and decide.
+    def update(self, t: float, probs: np.ndarray, bridged: bool = False) -> FilteredAction:
+        """Add one recognition (probabilities over `labels`) and decide. Every recognition
+        counts alike here (`bridged` is for the evidence rule).
 
         Raises:
             ValueError: `probs` does not have one entry per label.

@@ -11,6 +11,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from proxima.gesture.capture.model import MAX_GAP_S
+
 # The stream URIs `proxima.ingest.open_source` opens (what a spec may name).
 URI_SCHEMES = ("webcam:", "file:", "rtsp://", "rtsps://", "replay:", "sim:")
 NAME_PATTERN = r"^[A-Za-z0-9_.-]+$"
@@ -74,10 +76,11 @@ class EngineSettings(BaseModel):
         5, ge=1, description="classify the window every `stride` frames (tuned at 30 fps)"
     )
     max_gap_s: float = Field(
-        0.25,
+        MAX_GAP_S,
         gt=0.0,
-        description="a pause between poses longer than this restarts the window "
-        "(training windows never bridge more than 5 missing frames at 30 fps)",
+        description="a pause between poses longer than this restarts the window and "
+        "empties the decision rule; a shorter one is bridged (the window holds the poses "
+        "on both sides), as a field camera loses the operator for a moment",
     )
     window_clock: Literal["model", "poses", "time"] = Field(
         "model",

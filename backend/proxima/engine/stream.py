@@ -148,6 +148,7 @@ class StreamPipeline:
         self._restarted = True  # the filter was emptied since the last window (fusion)
         self.frames = 0
         self.classifications = 0
+        self.last_bridged = False  # the latest classified window held a bridged pause
         self.last_pose: Pose | None = None  # the operator's pose in the latest frame (taps)
         self._pose_stage: PoseStage | None = None
         self._smoother: PoseSmoother | None = (
@@ -275,12 +276,14 @@ class StreamPipeline:
             self._restarted = True
         if not self.window.due():
             return StreamUpdate(self.name, t, sight)
+        bridged = self.window.bridged()
         xyz, vis = self.window.take()
         size = pose.image_size
         aspect = size[0] / size[1] if size else DATASET_ASPECT
         classifier = self._classifier
         probs = np.asarray(classifier.predict(xyz, aspect=aspect))[0]
         self.classifications += 1
+        self.last_bridged = bridged
         best = int(np.argmax(probs))
         withheld = self.evidence.withheld(vis[0])
         self.publish(
@@ -293,7 +296,7 @@ class StreamPipeline:
                 withheld=withheld,
             )
         )
-        decision, action = decide_window(self.filter, t, probs, withheld)
+        decision, action = decide_window(self.filter, t, probs, withheld, bridged)
         self.publish(
             ActionEvent(
                 t=t,

@@ -7,6 +7,7 @@ from typing import Literal
 
 import numpy as np
 
+from proxima.gesture.capture.model import MAX_GAP_S, TRAIN_MAX_GAP_S
 from proxima.gesture.timebase import RATE_HZ, resample_windows
 from proxima.types import Pose
 
@@ -16,8 +17,10 @@ WindowClock = Literal["poses", "time"]
 class PoseWindow:
     """The last `size` poses of one stream, and when to classify them.
 
-    A pause longer than `max_gap_s` between poses (nobody detected, the operator changed)
-    empties the window, as training windows never bridge long gaps. `due()` is true once
+    A pause longer than `max_gap_s` between poses (nobody detected for that long) empties
+    the window; a shorter one is bridged, as a field camera loses the operator for a
+    moment (`proxima.gesture.capture.MAX_GAP_S`), and `bridged()` says so while the
+    window holds one longer than training windows do. `due()` is true once
     the window is full and `stride` poses came since the last classification.
 
     `clock="time"` keeps the window's span in seconds instead: the poses of the last
@@ -32,7 +35,7 @@ class PoseWindow:
         self,
         size: int = 60,
         stride: int = 5,
-        max_gap_s: float = 0.25,
+        max_gap_s: float = MAX_GAP_S,
         clock: WindowClock = "poses",
         rate: float = RATE_HZ,
     ) -> None:
@@ -91,6 +94,17 @@ class PoseWindow:
                 self._xyz.popleft()
                 self._vis.popleft()
         return restarted
+
+    def longest_pause_s(self) -> float:
+        """The longest pause between two of the window's poses (0 with fewer than two):
+        over `TRAIN_MAX_GAP_S` the window holds a bridged pause."""
+        if len(self._t) < 2:
+            return 0.0
+        return float(np.max(np.diff(np.fromiter(self._t, float, len(self._t)))))
+
+    def bridged(self) -> bool:
+        """Whether the window holds a pause longer than training windows do."""
+        return self.longest_pause_s() > TRAIN_MAX_GAP_S + 1e-9
 
     def full(self) -> bool:
         """Whether the window holds its whole span."""

@@ -185,7 +185,9 @@ class Recognitions:
     in it). For the frames in `classified` (indices into `updates`): `probs` the
     classifier's probabilities, `withheld` the gestures the hand evidence withheld, and
     `new_window` whether the window began a new stretch there (the stream's first, or the
-    first after a gap restarted the window, when the pipeline restarted its filter).
+    first after a gap restarted the window, when the pipeline restarted its filter), and
+    `bridged` whether the window held a bridged pause (None: none did; recognitions made
+    before the engine bridged pauses).
     """
 
     labels: tuple[str, ...]
@@ -198,6 +200,7 @@ class Recognitions:
     new_window: np.ndarray  # (N,) bool
     last_t: float = 0.0
     stream: str = STREAM
+    bridged: np.ndarray | None = None  # (N,) bool
 
 
 def recognize(
@@ -227,6 +230,7 @@ def recognize(
     updates: list[StreamUpdate] = []
     classified: list[int] = []
     new_window: list[bool] = []
+    bridged: list[bool] = []
     restarts: int | None = None  # the window's restarts at the previous classification
     with replay_source(stream) as source:
         for frame in source:
@@ -234,6 +238,7 @@ def recognize(
             updates.append(pipeline.process(frame))
             if pipeline.classifications > before:
                 classified.append(len(updates) - 1)
+                bridged.append(pipeline.last_bridged)
                 new_window.append(restarts is None or pipeline.window.restarts != restarts)
                 restarts = pipeline.window.restarts
     pipeline.close()
@@ -257,6 +262,7 @@ def recognize(
         withheld=withheld,
         new_window=np.asarray(new_window, dtype=bool),
         last_t=updates[-1].t if updates else 0.0,
+        bridged=np.asarray(bridged, dtype=bool),
     )
 
 
@@ -286,7 +292,8 @@ def decide(rec: Recognitions, control: ControlSettings) -> Run:
         probs = rec.probs[n]
         if rec.new_window[n]:
             filt.reset()
-        decision, action = decide_window(filt, frame.t, probs, rec.withheld[n])
+        bridged = rec.bridged is not None and bool(rec.bridged[n])
+        decision, action = decide_window(filt, frame.t, probs, rec.withheld[n], bridged)
         top = rec.labels[int(np.argmax(probs))]
         run.recognitions.append((frame.t, top, action, bool(rec.new_window[n])))
         update = StreamUpdate(frame.stream, frame.t, frame.sight, action, decision.confidence)

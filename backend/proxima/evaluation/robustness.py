@@ -6,7 +6,7 @@ Two checks, both on the held-out part of a split, both repeatable (fixed seeds):
   draw of height, angles, frame rate and losses per recording, as one drone position
   would give) and cut into the windows the live engine would classify
   (`live_windows`: 60 received poses, every `stride`, restarting after a pause over
-  0.25 s). Window accuracy and macro F1 for `clean`, every effect of `EFFECTS` at its
+  `MAX_GAP_S`). Window accuracy and macro F1 for `clean`, every effect of `EFFECTS` at its
   three `LEVELS`, and the combined `field` condition at its three levels (FIELD: level
   1 the measured live jitter, person 0.3-0.7 of the frame, elevation 0-30 deg, yaw
   +-20, roll +-10, 15-30 fps, 5% drops and 0.1 gaps/s, a lost part in 25% of the
@@ -46,7 +46,7 @@ from proxima.evaluation.metrics import accuracy_by, metrics
 from proxima.evaluation.replay import MemoClassifier, engine_run
 from proxima.evaluation.scoring import Score
 from proxima.evaluation.stitch import StitchedStream
-from proxima.gesture.capture import EFFECTS, CaptureModel, condition, live_windows
+from proxima.gesture.capture import EFFECTS, MAX_GAP_S, CaptureModel, condition, live_windows
 from proxima.gesture.classifier import GestureClassifier
 from proxima.gesture.clip import Clip
 from proxima.gesture.ensemble import EnsembleClassifier, load_checkpoint, members_of
@@ -392,8 +392,9 @@ def run_robustness(
         "test_clips": len(test),
         "method": "each test clip part captured whole (one draw per recording and repeat), "
         "cut into the live engine's windows (the model's window of received poses, or of "
-        "seconds resampled for a time-clock model, every `stride`, restarting after 0.25 s "
-        "without a pose); live: stitched held-out streams through the real engine",
+        "seconds resampled for a time-clock model, every `stride`, restarting after "
+        f"{MAX_GAP_S:g} s without a pose); live: stitched held-out streams through the "
+        "real engine",
         "window_clock": clf.window_clock,
     }
     result.update(window_robustness(clf, test, config, progress))
