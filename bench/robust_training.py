@@ -81,6 +81,13 @@ def windows_cmd(args: argparse.Namespace) -> dict:
     return out
 
 
+def engine_settings(args: argparse.Namespace) -> EngineSettings:
+    """The engine settings the streams are recognised with: the defaults, with
+    `--max-gap` where given (`streams` has no such option)."""
+    gap = getattr(args, "max_gap", None)
+    return EngineSettings() if gap is None else EngineSettings(max_gap_s=gap)
+
+
 def recognised_streams(checkpoint: str, args: argparse.Namespace, cache: Path | None) -> tuple:
     """(tuning sets, evaluation sets): per condition (clean, `field` 1) the stitched
     streams (`args.tune_streams` from seed 0, `args.streams` from seed 1000, of
@@ -91,8 +98,7 @@ def recognised_streams(checkpoint: str, args: argparse.Namespace, cache: Path | 
         return pickle.loads(cache.read_bytes())
     clips = load_data(["laser"]).clips
     clf = load_classifier(checkpoint)  # comma-joined: their ensemble
-    gap = getattr(args, "max_gap", None)  # `streams` has no such option
-    settings = EngineSettings() if gap is None else EngineSettings(max_gap_s=gap)
+    settings = engine_settings(args)
     tune_sets, eval_sets = {}, {}
     whole = getattr(args, "whole_stream_capture", False)  # `streams` has no such option
     for key, model in {"clean": condition("clean"), "field1": condition("field", 1)}.items():

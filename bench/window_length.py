@@ -30,14 +30,13 @@ from typing import Any
 import numpy as np
 import torch
 
-from bench.robust_training import log, recognised_streams, write_doc
+from bench.robust_training import engine_settings, log, recognised_streams, write_doc
 from bench.robust_untempered import untempered
 from proxima.control import AVERAGE_RULE, ControlSettings
 from proxima.engine import load_classifier
 from proxima.evaluation.latency import evaluate_config, rank
 from proxima.evaluation.metrics import evaluate_checkpoint
 from proxima.evaluation.robust_training import pool, summary_row, tune_evidence
-from proxima.gesture.capture import MAX_GAP_S
 
 EVIDENCE_KEYS = ("evidence_threshold", "evidence_half_life_s", "evidence_clip", "confirm")
 HEADLINE = ("hit_rate", "on_time_rate", "latency_median_s", "latency_p95_s", "wrong", "repeats")
@@ -51,7 +50,7 @@ def cache_path(checkpoint: str, args: argparse.Namespace) -> Path:
     sizes = (args.tune_streams, args.streams, args.segments)
     tail = "" if sizes == (6, 12, 30) else "-t{}-e{}-g{}".format(*sizes)
     tail += "-whole" if args.whole_stream_capture else ""
-    gap = getattr(args, "max_gap", None) or MAX_GAP_S
+    gap = engine_settings(args).max_gap_s
     tail += f"-gap{gap:g}" if gap != 0.25 else ""
     return args.cache_dir / f"recs-{Path(checkpoint).stem}{tail}.pkl"
 
