@@ -280,6 +280,26 @@ def test_a_hidden_part_keeps_its_place_at_low_visibility(hover_f) -> None:
     np.testing.assert_allclose(cap.visibility[:, 0], hover_f.visibility[:, 0], atol=1e-6)
 
 
+def test_the_loss_condition_acts_through_the_lost_parts_jitter(hover_f) -> None:
+    # A lost part keeps its place (MediaPipe's guess) at a visibility the classifier does
+    # not read, so the condition runs at the measured jitter, as `distance` does: what a
+    # lost part changes in the features is its larger jitter.
+    for level in (1, 2, 3):
+        assert condition("loss", level).jitter == condition("jitter", 1).jitter == 1.0
+    hidden = CaptureModel(loss_rate=1.0, loss_parts=("left_arm",), loss_modes=("hidden",),
+                          loss_s=60.0)  # fmt: skip
+    seen = CaptureModel()
+    arm, head = [13, 15, 17, 19, 21], [0, 11, 12, 23, 24]
+
+    def step_rms(model: CaptureModel, points: list[int]) -> float:
+        cap = model.apply_clip(hover_f, np.random.default_rng(14))
+        d2 = np.diff(metric(cap.xyz)[:, points, :2], n=2, axis=0)  # hover: still arms
+        return float(np.sqrt(np.mean(d2**2)))
+
+    assert step_rms(hidden, arm) > 3 * step_rms(seen, arm)  # measured: 5-6 times
+    assert step_rms(hidden, head) == pytest.approx(step_rms(seen, head), rel=0.25)
+
+
 def test_points_a_data_set_lacks_are_left_alone(uav_dir) -> None:
     from proxima.gesture.uavgesture import load_mat
 

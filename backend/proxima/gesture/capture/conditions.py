@@ -1,11 +1,14 @@
 """Named capture conditions: each effect alone at three levels, `clean`, and `field`.
 
-Each single effect is isolated (no jitter, no visibility noise) except `jitter` and
-`distance` (distance acts through the jitter it brings: the features are scale-free),
-so a robustness curve names what it measures. Level 1 is mild, 3 is the edge of the
-documented range. `field` combines them as a hovering drone a few metres away would:
-level 1 at the measured live jitter, level 2 the same at twice the jitter (the issue's
-second target), level 3 every effect at its harshest.
+Each single effect is isolated (no jitter, no visibility noise) except `jitter`,
+`distance` and `loss`, which act through the jitter they bring: the features are
+scale-free, and a lost part keeps MediaPipe's guess of its place at a low visibility
+(which the classifier does not read) and the larger jitter of that visibility. So a
+robustness curve names what it measures; compare `distance` and `loss` with `jitter` 1.
+Level 1 is mild, 3 is the edge of the documented range. `field` combines them as a
+hovering drone a few metres away would: level 1 at the measured live jitter, level 2 the
+same at twice the jitter (the issue's second target), level 3 every effect at its
+harshest.
 """
 
 from __future__ import annotations
@@ -51,7 +54,12 @@ LEVELS: dict[str, Levels] = {
         replace(CLEAN, drop_rate=0.1, gap_rate_hz=0.2),
         replace(CLEAN, drop_rate=0.2, gap_rate_hz=0.5),
     ),
-    "loss": _quiet("loss_rate", (0.25, 0.5, 1.0)),
+    # at the measured jitter: without it a lost part changes no feature (see above)
+    "loss": (
+        CaptureModel(loss_rate=0.25),
+        CaptureModel(loss_rate=0.5),
+        CaptureModel(loss_rate=1.0),
+    ),
 }
 
 _FIELD = CaptureModel(
