@@ -289,7 +289,7 @@ def test_the_loss_condition_acts_through_the_lost_parts_jitter(hover_f) -> None:
     hidden = CaptureModel(loss_rate=1.0, loss_parts=("left_arm",), loss_modes=("hidden",),
                           loss_s=60.0)  # fmt: skip
     seen = CaptureModel()
-    arm, head = [13, 15, 17, 19, 21], [0, 11, 12, 23, 24]
+    arm, torso = [13, 15, 17, 19, 21], [0, 11, 12, 23, 24]
 
     def step_rms(model: CaptureModel, points: list[int]) -> float:
         cap = model.apply_clip(hover_f, np.random.default_rng(14))
@@ -297,7 +297,7 @@ def test_the_loss_condition_acts_through_the_lost_parts_jitter(hover_f) -> None:
         return float(np.sqrt(np.mean(d2**2)))
 
     assert step_rms(hidden, arm) > 3 * step_rms(seen, arm)  # measured: 5-6 times
-    assert step_rms(hidden, head) == pytest.approx(step_rms(seen, head), rel=0.25)
+    assert step_rms(hidden, torso) == pytest.approx(step_rms(seen, torso), rel=0.25)
 
 
 def test_points_a_data_set_lacks_are_left_alone(uav_dir) -> None:
