@@ -1,5 +1,7 @@
 """The sliding pose window: stride and restarts at gaps, on real dataset poses."""
 
+import pytest
+
 from proxima.engine import PoseWindow
 from proxima.engine.config import EngineSettings
 from proxima.gesture.capture import MAX_GAP_S
@@ -111,6 +113,7 @@ def test_the_engine_times_windows_as_the_model_trained(shipped_member, tmp_path)
 
     from proxima.engine.config import EngineSettings, StreamSpec
     from proxima.engine.stream import StreamPipeline
+    from proxima.engine.window import engine_clock
     from proxima.gesture.classifier import GestureClassifier
 
     blob = torch.load(shipped_member, map_location="cpu", weights_only=True)
@@ -128,6 +131,10 @@ def test_the_engine_times_windows_as_the_model_trained(shipped_member, tmp_path)
     assert clock(resampled, EngineSettings()) == "time"
     assert clock(resampled, EngineSettings(window_clock="poses")) == "poses"
     assert clock(shipped, EngineSettings(window_clock="time")) == "time"
+    clocks = [engine_clock(s, "time") for s in ("model", "poses", "time")]
+    assert clocks == ["time", "poses", "time"]
+    with pytest.raises(ValueError, match="sundial"):
+        engine_clock("sundial", "poses")
     # a swap to a model of the other clock brings its window
     pipeline = StreamPipeline(spec, shipped, lambda e: None)
     pipeline.swap_classifier(resampled)

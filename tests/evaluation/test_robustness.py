@@ -61,6 +61,8 @@ def test_the_command_writes_the_named_fields_and_a_png(small_run) -> None:
         assert all(set(v) >= LIVE_KEYS for v in live[name]["per_view"].values())
     assert live["streams"]["count"] == 2 and live["field_condition"]["level"] == 1
     assert live["field"]["fps"][1] <= 30.0
+    # the engine's default clock follows the model's training windows
+    assert result["window_clock"] == result["training_clock"] == "poses"
 
 
 def test_heavy_jitter_scores_below_clean(small_run) -> None:
@@ -95,11 +97,17 @@ def test_a_captured_stream_keeps_its_script(laser_clips) -> None:
     assert cap.duration_s == pytest.approx(stream.duration_s, abs=0.1)
 
 
-def test_bad_requests_name_the_problem() -> None:
+def test_bad_requests_name_the_problem(tmp_path: Path) -> None:
     with pytest.raises(RobustnessError, match="unknown condition"):
         RobustnessConfig(conditions=("fog",))
     with pytest.raises(RobustnessError, match="live level"):
         RobustnessConfig(live_level=4)
+    result = CliRunner().invoke(
+        app, ["robustness", "--checkpoint", str(SHIPPED), "--window-clock", "sundial",
+              "--json", str(tmp_path / "r.json")],
+    )  # fmt: skip
+    assert result.exit_code != 0 and "window_clock" in result.output
+    assert not (tmp_path / "r.json").exists()
 
 
 def test_recall_against_the_script_counts_what_a_missed_arming_blocked() -> None:

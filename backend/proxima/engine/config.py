@@ -11,6 +11,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from proxima.engine.window import DEFAULT_CLOCK, ClockSetting
 from proxima.gesture.capture.model import MAX_GAP_S
 
 # The stream URIs `proxima.ingest.open_source` opens (what a spec may name).
@@ -82,13 +83,13 @@ class EngineSettings(BaseModel):
         "empties the decision rule; a shorter one is bridged (the window holds the poses "
         "on both sides), as a field camera loses the operator for a moment",
     )
-    window_clock: Literal["model", "poses", "time"] = Field(
-        "model",
-        description="`poses`: the window holds the last N poses received, whatever their "
-        "times (a 15 fps camera's 30-pose window spans 2 s); `time`: the last (N - 1) / 30 s "
-        "resampled to N poses and classified every stride / 30 s (`proxima.engine.window`); "
-        "`model`: the clock the checkpoint's training windows had (`proxima train "
-        "--window-clock`; older checkpoints: poses)",
+    window_clock: ClockSetting = Field(
+        DEFAULT_CLOCK,
+        description="`model`: the clock the checkpoint's training windows had (`proxima "
+        "train --window-clock`; older checkpoints: poses); `poses`: the last N poses "
+        "received, whatever their times (a 15 fps camera's 30-pose window spans 2 s); "
+        "`time`: the last (N - 1) / 30 s resampled to N poses and classified every "
+        "stride / 30 s, whatever the camera's rate (`proxima.engine.window`)",
     )
     smooth_replays: bool = Field(
         True,

@@ -45,7 +45,7 @@ from proxima.control import (
 from proxima.engine.config import EngineSettings, StreamSpec
 from proxima.engine.fusion import window_evidence
 from proxima.engine.taps import StreamTaps
-from proxima.engine.window import PoseWindow, WindowClock
+from proxima.engine.window import PoseWindow, WindowClock, engine_clock
 from proxima.events import ActionEvent, GestureEvent, PoseEvent
 from proxima.pose import PoseSmoother, operator_sight
 from proxima.types import Event, Frame, Pose
@@ -162,10 +162,7 @@ class StreamPipeline:
         self._closed = False
 
     def _clock(self, classifier: Classifier) -> WindowClock:
-        clock = self.settings.window_clock
-        if clock == "model":
-            return "time" if classifier.window_clock == "time" else "poses"
-        return clock
+        return engine_clock(self.settings.window_clock, classifier.window_clock)
 
     def _new_window(self, classifier: Classifier) -> PoseWindow:
         s = self.settings

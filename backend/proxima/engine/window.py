@@ -12,6 +12,21 @@ from proxima.gesture.timebase import RATE_HZ, resample_windows
 from proxima.types import Pose
 
 WindowClock = Literal["poses", "time"]
+ClockSetting = Literal["model", "poses", "time"]
+# The engine's default (`EngineSettings.window_clock`): the clock the model trained on.
+# The shipped `body` model on the time clock gives fewer commands (in-sample `field`
+# 84.4 % against 86.1 %, docs/experiments.md "Thirty-third session").
+DEFAULT_CLOCK: ClockSetting = "model"
+
+
+def engine_clock(setting: str, model_clock: str) -> WindowClock:
+    """The clock a window runs on: `setting` (an engine's `window_clock`), where `model`
+    means the clock of the model's training windows (`model_clock`)."""
+    if setting == "model":
+        return "time" if model_clock == "time" else "poses"
+    if setting not in ("poses", "time"):
+        raise ValueError(f"window clock must be model, poses or time, got {setting!r}")
+    return "time" if setting == "time" else "poses"
 
 
 class PoseWindow:

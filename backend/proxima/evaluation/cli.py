@@ -93,6 +93,13 @@ def robustness(
     live_streams: Annotated[int, typer.Option(help="Stitched held-out streams.")] = 36,
     live_segments: Annotated[int, typer.Option(help="Gestures per stream.")] = 20,
     live_level: Annotated[int, typer.Option(help="Level of the field condition (1-3).")] = 1,
+    window_clock: Annotated[
+        str,
+        typer.Option(
+            help="The engine's window clock, for windows and the live check: model (the "
+            "engine's default: the checkpoint's training clock), poses or time."
+        ),
+    ] = "model",
 ) -> None:
     """A checkpoint under the capture model (docs/robustness.md): window accuracy and
     macro F1 clean, under each capture effect at three levels and under `field`; and
@@ -102,6 +109,7 @@ def robustness(
     import torch
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from proxima.engine.config import EngineSettings
     from proxima.evaluation.plots import plot_robustness
     from proxima.evaluation.robustness import (
         CONDITION_NAMES,
@@ -118,8 +126,9 @@ def robustness(
             conditions=tuple(condition or CONDITION_NAMES), repeats=repeats, stride=stride,
             limit=limit, seed=seed, live=live, live_streams=live_streams,
             live_segments=live_segments, live_level=live_level,
+            engine=EngineSettings(window_clock=window_clock),  # type: ignore[arg-type]
         )  # fmt: skip
-    except RobustnessError as exc:
+    except (RobustnessError, ValueError) as exc:
         _fail(exc)
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                TimeElapsedColumn())  # fmt: skip
@@ -137,10 +146,10 @@ def robustness(
             f"--split {split}", f"--json {json_out}"]  # fmt: skip
     args += [f"--condition {c}" for c in condition or []]
     defaults = {"repeats": 3, "stride": 3, "limit": None, "seed": 0, "live_streams": 36,
-                "live_segments": 20, "live_level": 1}  # fmt: skip
+                "live_segments": 20, "live_level": 1, "window_clock": "model"}  # fmt: skip
     given = {"repeats": repeats, "stride": stride, "limit": limit, "seed": seed,
              "live_streams": live_streams, "live_segments": live_segments,
-             "live_level": live_level}  # fmt: skip
+             "live_level": live_level, "window_clock": window_clock}  # fmt: skip
     args += [f"--{k.replace('_', '-')} {v}" for k, v in given.items() if v != defaults[k]]
     if not live:
         args.append("--no-live")

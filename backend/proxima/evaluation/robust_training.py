@@ -22,6 +22,7 @@ import numpy as np
 from proxima.control import ControlSettings
 from proxima.engine.config import EngineSettings
 from proxima.engine.stream import Classifier
+from proxima.engine.window import DEFAULT_CLOCK, engine_clock
 from proxima.evaluation.latency import VIEWS, brief, evaluate_config, rank, utility
 from proxima.evaluation.replay import MemoClassifier, Recognitions, recognize
 from proxima.evaluation.stitch import StitchedStream, random_plan, stitch_views
@@ -58,7 +59,8 @@ def window_accuracy(
         cap = model.apply_clip(part, rng)
         if smoothed:
             cap = smooth(cap)
-        xyz, _, _ = live_windows(cap, classifier.window, stride, clock=classifier.window_clock)
+        clock = engine_clock(DEFAULT_CLOCK, classifier.window_clock)  # the engine's default
+        xyz, _, _ = live_windows(cap, classifier.window, stride, clock=clock)
         if not len(xyz):
             continue
         probs = classifier.predict(xyz, aspect=part.aspect)

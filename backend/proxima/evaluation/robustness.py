@@ -41,6 +41,7 @@ import numpy as np
 
 from proxima.control import ControlSettings
 from proxima.engine.config import EngineSettings
+from proxima.engine.window import engine_clock
 from proxima.evaluation.latency import build_streams, describe_streams
 from proxima.evaluation.metrics import accuracy_by, metrics
 from proxima.evaluation.replay import MemoClassifier, engine_run
@@ -213,8 +214,10 @@ def window_robustness(
 ) -> dict[str, Any]:
     """`clean` and every configured condition at levels 1-3 (see the module)."""
 
+    clock = engine_clock(config.engine.window_clock, clf.window_clock)
+
     def run(name: str, level: int, model: CaptureModel) -> dict[str, Any]:
-        w = captured_windows(clips, model, name, level, config, clf.window, clf.window_clock)
+        w = captured_windows(clips, model, name, level, config, clf.window, clock)
         return score_condition(clf, clips, w)
 
     clean = run("clean", 0, condition("clean"))
@@ -392,10 +395,11 @@ def run_robustness(
         "test_clips": len(test),
         "method": "each test clip part captured whole (one draw per recording and repeat), "
         "cut into the live engine's windows (the model's window of received poses, or of "
-        "seconds resampled for a time-clock model, every `stride`, restarting after "
+        "seconds resampled on the time clock, every `stride`, restarting after "
         f"{MAX_GAP_S:g} s without a pose); live: stitched held-out streams through the "
         "real engine",
-        "window_clock": clf.window_clock,
+        "window_clock": engine_clock(config.engine.window_clock, clf.window_clock),
+        "training_clock": clf.window_clock,
     }
     result.update(window_robustness(clf, test, config, progress))
     if config.live:
