@@ -3,7 +3,13 @@ from __future__ import annotations
 import numpy as np
 
 from proxima.gesture.augment import mirror, rotate, time_warp, transitions
-from proxima.gesture.features import BodyImagePipeline, BodyPipeline, PaperPipeline, make_pipeline
+from proxima.gesture.features import (
+    BodyImagePipeline,
+    BodyPipeline,
+    BodySmoothZPipeline,
+    PaperPipeline,
+    make_pipeline,
+)
 from proxima.gesture.geometry import rotation_matrix, to_metric
 from proxima.gesture.windows import make_windows
 from proxima.types import GESTURES
@@ -114,3 +120,25 @@ def test_transitions_join_two_gestures_of_one_scene(laser_clips) -> None:
         joined += 1
     assert joined > len(m) // 4
     assert set(w.scene) == {"laser/laser/f", "laser/laser/l"}
+
+
+def test_smoothing_the_depth_keeps_body_features_and_damps_the_depth_jitter(laser_clips) -> None:
+    w = _windows(laser_clips, "l")  # a side view: the turn mixes z into x most
+    m = to_metric(w.xyz, w.aspect)
+    smooth, body = make_pipeline("body-smooth-z", {}), BodyPipeline()
+    assert isinstance(smooth, BodySmoothZPipeline) and smooth.num_features == body.num_features
+    clean_s, clean_b = smooth.transform(m, w.has_z), body.transform(m, w.has_z)
+    # LASER's depth is smooth: the averaged one moves the features little
+    assert np.median(np.abs(clean_s - clean_b)) < 0.02
+    # the live path's depth jitter (23 times x and y's): far less of it reaches the features
+    noisy = m.copy()
+    noisy[..., 2] += np.random.default_rng(0).normal(0.0, 0.05, noisy[..., 2].shape)
+    err_s = np.abs(smooth.transform(noisy, w.has_z) - clean_s).mean()
+    err_b = np.abs(body.transform(noisy, w.has_z) - clean_b).mean()
+    assert err_s < 0.5 * err_b, (err_s, err_b)
+    # a depth steady over the window is left as it is: then it is `body` exactly
+    steady = m.copy()
+    steady[..., 2] = m[:, :1, :, 2]
+    np.testing.assert_allclose(smooth.transform(steady, w.has_z), body.transform(steady, w.has_z),
+                               atol=1e-5)  # fmt: skip
+    np.testing.assert_allclose(smooth.transform(m), smooth.transform(2.5 * m + 0.3), atol=1e-4)

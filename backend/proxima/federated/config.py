@@ -27,7 +27,7 @@ Partition = Literal["view", "iid", "dirichlet"]
 STRATEGIES: tuple[str, ...] = get_args(Strategy)
 PARTITIONS: tuple[str, ...] = get_args(Partition)
 # pipelines without fitted statistics (docs/gesture.md), so no drone scales on its own
-SCALE_FREE_PIPELINES = ("body", "body-image")
+SCALE_FREE_PIPELINES = ("body", "body-image", "body-smooth-z")
 VIEWS = ("f", "l", "r")
 VIEW_NAMES = {"f": "front", "l": "left", "r": "right"}
 APP_DIR = Path(__file__).resolve().parent / "flower-app"
@@ -127,9 +127,10 @@ class FLConfig:
                 raise ConfigError(f"run config {_key(name)!r}: {what} (got {value!r})") from None
         if self.pipeline not in SCALE_FREE_PIPELINES:
             raise ConfigError(
-                f"run config 'pipeline': only the scale-free 'body' and 'body-image' pipelines "
-                f"are supported for federated runs: the 'paper' MinMax pipeline would scale "
-                f"each drone with statistics only it has (got {self.pipeline!r})"
+                f"run config 'pipeline': only the scale-free pipelines "
+                f"({', '.join(SCALE_FREE_PIPELINES)}) are supported for federated runs: the "
+                f"'paper' MinMax pipeline would scale each drone with statistics only it has "
+                f"(got {self.pipeline!r})"
             )
         if self.keep_round == "best" and self.fraction_evaluate == 0:
             raise ConfigError(

@@ -41,7 +41,8 @@ def train(
     model: Annotated[str, typer.Option(help="tcn (default) or paper-lstm.")] = "tcn",
     split: SplitOpt = "temporal",
     pipeline: Annotated[
-        str | None, typer.Option(help="paper, body or body-image (default: the model's).")
+        str | None,
+        typer.Option(help="paper, body, body-image or body-smooth-z (default: the model's)."),
     ] = None,
     epochs: int = 60,
     patience: int = 15,

@@ -13,6 +13,8 @@
   is rough in the side views (near profile), and the turn mixes it into x; for a camera
   position seen in training the unturned picture is the cleaner one (temporal split
   0.920 -> 0.950, unseen left view 0.551 -> 0.657; docs/gesture.md).
+- `body-smooth-z`: `body` with the depth averaged over a few frames before the turn (an
+  option under measurement, docs/experiments.md "Thirty-third session").
 """
 
 from __future__ import annotations
@@ -108,11 +110,28 @@ class BodyImagePipeline(BodyPipeline):
         return super().canonical(metric, np.zeros(len(metric), dtype=bool))
 
 
-Pipeline = PaperPipeline | BodyPipeline | BodyImagePipeline
+class BodySmoothZPipeline(BodyPipeline):
+    name = "body-smooth-z"
+    z_frames = 9  # the centred moving average over the window's frames (0.3 s at 30 fps)
+
+    def canonical(self, metric: np.ndarray, has_z: np.ndarray | None = None) -> np.ndarray:
+        """`body` with each landmark's depth averaged over `z_frames` frames before the
+        turn: the live path's z jitters 23 times x and y (docs/capture.md), and the turn
+        mixes z into x by the sine of the facing angle, so a side view's every joint
+        inherits it; the average cuts that noise by about 3 and keeps slower depth motion."""
+        from scipy.ndimage import uniform_filter1d
+
+        steady = np.array(metric, dtype=np.float64, copy=True)
+        steady[..., 2] = uniform_filter1d(steady[..., 2], self.z_frames, axis=-2, mode="nearest")
+        return super().canonical(steady, has_z)
+
+
+Pipeline = PaperPipeline | BodyPipeline | BodyImagePipeline | BodySmoothZPipeline
 PIPELINES: dict[str, type[PaperPipeline] | type[BodyPipeline]] = {
     "paper": PaperPipeline,
     "body": BodyPipeline,
     "body-image": BodyImagePipeline,
+    "body-smooth-z": BodySmoothZPipeline,
 }
 
 
