@@ -53,13 +53,13 @@ def window_accuracy(
     right: list[np.ndarray] = []
     views: list[str] = []
     weak: list[dict[str, Any]] = []  # parts under 90 % right: where the errors are
+    clock = engine_clock(DEFAULT_CLOCK, classifier.window_clock)  # the engine's default
     for part in parts:
         if len(part) < classifier.window + 1:
             continue
         cap = model.apply_clip(part, rng)
         if smoothed:
             cap = smooth(cap)
-        clock = engine_clock(DEFAULT_CLOCK, classifier.window_clock)  # the engine's default
         xyz, _, _ = live_windows(cap, classifier.window, stride, clock=clock)
         if not len(xyz):
             continue
