@@ -130,8 +130,12 @@ def test_init_starts_the_global_model_from_a_checkpoint(tmp_path, shipped_member
     shipped = shipped_member
     with pytest.raises(ConfigError, match=r"'init': .*an ensemble of \d+ models"):
         start_model(fast_config(init=str(default_checkpoint())))
-    window = GestureClassifier.load(shipped).window
-    cfg = fast_config(init=str(shipped), window=window)
+    member = GestureClassifier.load(shipped)
+    window, pipeline = member.window, member.pipeline.name
+    assert pipeline == "body-smooth-z"  # the shipped members' features since 2026-12-07
+    with pytest.raises(ConfigError, match=r"'init': .*'body-smooth-z' pipeline.*with 'body'"):
+        start_model(fast_config(init=str(shipped), window=window, pipeline="body"))
+    cfg = fast_config(init=str(shipped), window=window, pipeline=pipeline)
     model, _ = start_model(cfg)
     want = get_weights(GestureClassifier.load(shipped).model)
     got = get_weights(model)
@@ -146,7 +150,7 @@ def test_init_starts_the_global_model_from_a_checkpoint(tmp_path, shipped_member
     with pytest.raises(ConfigError, match=r"'init': .* a tcn model .* this run trains paper-lstm"):
         start_model(fast_config(init=str(shipped), model="paper-lstm", window=window))
     # the start's window need not be the run's: a 60-frame run starts from it as well
-    other, _ = start_model(fast_config(init=str(shipped), window=60))
+    other, _ = start_model(fast_config(init=str(shipped), window=60, pipeline=pipeline))
     assert all(np.array_equal(get_weights(other)[k], want[k]) for k in want)
 
 
