@@ -14,8 +14,9 @@ from proxima.types import Pose
 WindowClock = Literal["poses", "time"]
 ClockSetting = Literal["model", "poses", "time"]
 # The engine's default (`EngineSettings.window_clock`): the clock the model trained on.
-# The shipped `body` model on the time clock gives fewer commands (in-sample `field`
-# 84.4 % against 86.1 %, docs/experiments.md "Thirty-third session").
+# Models trained on the pose clock lose commands on the time clock (`body` in-sample
+# `field` 84.4 % against 86.1 %; `body-smooth-z` held out 76.1 % against 79.9 %,
+# docs/experiments.md "Thirty-third session" and "Thirty-fourth session").
 DEFAULT_CLOCK: ClockSetting = "model"
 
 

@@ -13,8 +13,8 @@
   is rough in the side views (near profile), and the turn mixes it into x; for a camera
   position seen in training the unturned picture is the cleaner one (temporal split
   0.920 -> 0.950, unseen left view 0.551 -> 0.657; docs/gesture.md).
-- `body-smooth-z`: `body` with the depth averaged over a few frames before the turn (an
-  option under measurement, docs/experiments.md "Thirty-third session").
+- `body-smooth-z`: `body` with the depth averaged over a few frames before the turn; the
+  shipped model's pipeline since 2026-12-07 (docs/experiments.md "Thirty-fourth session").
 """
 
 from __future__ import annotations
