@@ -40,7 +40,8 @@ class PoseEvent(Event):
 class GestureEvent(Event):
     """One raw classification of the last window of a stream. `withheld` names the
     gestures that may not be the filtered action while this is the newest window (the
-    thumb gestures, when it does not see the operator's hand; see control/evidence.py)."""
+    thumb gestures, when it does not see the operator's hand or that arm stays down;
+    see control/evidence.py)."""
 
     gesture: str
     confidence: float

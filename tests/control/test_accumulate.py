@@ -176,3 +176,33 @@ def test_a_window_across_a_bridged_pause_adds_part_of_its_evidence() -> None:
     assert rule.score[0] == pytest.approx(0.5 * np.log(4.0))
     with pytest.raises(ValueError, match="bridged weight"):
         EvidenceAccumulator(labels, bridged_weight=1.5)
+
+
+def test_the_thumb_pair_is_decided_as_one_gesture_then_by_its_running_log_ratio() -> None:
+    labels = ("all_clear", "not_clear", "hover")
+    doubt = np.array([0.35, 0.55, 0.10])  # a front view: sure of the arm, unsure of the thumb
+    t = np.arange(40) / 6
+    # each alone: log-odds of 0.55 is 0.2 nats a window, short of 4 nats at any length
+    plain = EvidenceAccumulator(labels, threshold=4.0, half_life_s=1.0)
+    assert {plain.update(float(ti), doubt).action for ti in t} == {""}
+    # two steps: the pair gains log 9 = 2.2 nats a window; the signed sum gains
+    # 0.9 x log(0.35 / 0.55) = -0.41 a window (leaking 11 %) and passes -2 at the 7th
+    rule = EvidenceAccumulator(labels, threshold=4.0, half_life_s=1.0, pair_margin=2.0)
+    got = [rule.update(float(ti), doubt).action for ti in t]
+    assert got[:6] == [""] * 6 and set(got[6:]) == {"not_clear"}
+    assert rule.score[0] == rule.score[1] > 4.0 and rule.pair_ratio < -2.0
+    # a window that does not see the hand drops the thumb's evidence, not only the pair's
+    decide_window(rule, 40 / 6, doubt, THUMB_GESTURES)
+    assert rule.pair_ratio == 0.0 and rule.score[0] == rule.score[1] == 0.0
+    # an arm whose thumb flips from window to window never commands either
+    flip = EvidenceAccumulator(labels, threshold=4.0, half_life_s=1.0, pair_margin=2.0)
+    acts = {flip.update(float(ti), doubt if k % 2 else doubt[[1, 0, 2]]).action
+            for k, ti in enumerate(t)}  # fmt: skip
+    assert acts == {""} and flip.score[0] > 4.0
+    # the setting reaches the rule: 12 nats by default, None for two gestures like the rest
+    on = decision_filter(ControlSettings(), labels)
+    assert isinstance(on, EvidenceAccumulator) and on.pair_margin == 12.0
+    off = decision_filter(ControlSettings(evidence_pair_margin=None), labels)
+    assert isinstance(off, EvidenceAccumulator) and off._pair is None
+    with pytest.raises(ValueError, match="pair margin"):
+        EvidenceAccumulator(labels, pair_margin=-1.0)

@@ -6,7 +6,8 @@ import pytest
 from pydantic import ValidationError
 
 from proxima.control import ControlSettings, HandEvidence
-from proxima.control.evidence import hand_seen, hands_seen
+from proxima.control.evidence import arm_raised, hand_seen, hands_seen
+from proxima.gesture.idle import still_prefix
 from proxima.types import GESTURES
 
 
@@ -43,6 +44,61 @@ def test_a_hidden_hand_withholds_only_the_thumb_gestures(laser_clips) -> None:
     assert [evidence.action(g, []) for g in GESTURES] == list(GESTURES)
     assert HandEvidence.from_settings(ControlSettings(thumb_hand="off")).withheld(hidden) == []
     assert HandEvidence("left").withheld(hidden) == []  # the left hand faces that camera
+
+
+def raised_share(xyz: np.ndarray, vis: np.ndarray, aspect: float) -> float:
+    """Share of the 30-frame windows (step 5) in which the right arm rises half the way."""
+    starts = range(0, len(xyz) - 30, 5)
+    return float(
+        np.mean(
+            [
+                arm_raised(xyz[s : s + 30], vis[s : s + 30], "right", 0.5, 0.5, aspect)
+                for s in starts
+            ]
+        )
+    )
+
+
+def rolled(xyz: np.ndarray, degrees: float, aspect: float) -> np.ndarray:
+    """`xyz` turned in the image plane about the frame's centre, as a tilted drone sees it."""
+    a = np.radians(degrees)
+    x, y = (xyz[..., 0] - 0.5) * aspect, xyz[..., 1] - 0.5
+    out = xyz.copy()
+    out[..., 0] = (np.cos(a) * x - np.sin(a) * y) / aspect + 0.5
+    out[..., 1] = np.sin(a) * x + np.cos(a) * y + 0.5
+    return out
+
+
+def test_the_thumb_gestures_raise_the_arm_and_a_hanging_arm_withholds_them(laser_clips) -> None:
+    clips = {c.name.split("_", 2)[2]: c for c in laser_clips}
+    for name in ("all_clear_f", "all_clear_r", "not_clear_f", "not_clear_r"):
+        clip = clips[name]
+        for roll in (0.0, -15.0, 15.0):
+            xyz = rolled(clip.xyz, roll, clip.aspect)
+            assert raised_share(xyz, clip.visibility, clip.aspect) >= 0.95, (name, roll)
+    # the operator at rest, arms hanging: the still openings of two front clips, which
+    # the classifier alone reads as the pair (docs/experiments.md, "Thirty-fifth session")
+    for name in ("have_command_f", "move_downward_f"):
+        rest = clips[name]
+        still = slice(0, still_prefix(rest.xyz))
+        assert still.stop >= 20, name
+        assert not arm_raised(
+            rest.xyz[still], rest.visibility[still], "right", 0.5, 0.5, rest.aspect
+        )
+    window = slice(0, 20)
+    evidence = HandEvidence.from_settings(ControlSettings())
+    assert evidence.withheld(rest.visibility[window], rest.xyz[window], rest.aspect) == [
+        "all_clear",
+        "not_clear",
+    ]
+    assert evidence.withheld(rest.visibility[window]) == []  # no landmarks: the hand alone
+    assert (
+        HandEvidence("right", 0.5, None).withheld(rest.visibility[window], rest.xyz[window]) == []
+    )
+    # a window that does not see the shoulder and hip cannot judge the arm: no withholding
+    unseen = rest.visibility[window].copy()
+    unseen[:, [12, 24]] = 0.0
+    assert arm_raised(rest.xyz[window], unseen, "right", 0.5, 0.5, rest.aspect)
 
 
 def test_a_bad_hand_setting_is_refused() -> None:

@@ -46,7 +46,7 @@ class StreamLive:
     pose_t: float | None = None  # stream time of the newest pose
     gesture: str = ""  # GestureEvent: the newest raw classification
     gesture_confidence: float = 0.0
-    withheld: tuple[str, ...] = ()  # gestures that may not be the action (no hand seen)
+    withheld: tuple[str, ...] = ()  # gestures that may not be the action (hand unseen, arm down)
     action: str = ""  # ActionEvent: the filtered decision, "" below the threshold
     action_confidence: float = 0.0
     armed: bool = False  # ArmingEvent

@@ -20,6 +20,14 @@ recognition it could never reach 16 nats: 3 a window at most, halving every seco
 A window that bridges a pause longer than training windows hold (`bridged`: the engine
 keeps its window across a moment without the operator, engine/window.py) adds
 `bridged_weight` of its evidence: the jump in it is outside what the model learned.
+With `pair_margin` set, the thumb pair (`all_clear`, `not_clear`: one raised arm, thumb up
+or down) is decided in two steps, as the classifier finds it: a window that is sure the
+arm gives one of the two but splits 0.6 / 0.4 between them adds nothing to either alone
+(log-odds of 0.6 barely pass zero), so the pair's commands starve although the arm is
+plain. Then the pair shares one score, fed by the log-odds of the two probabilities'
+sum, and a signed running sum of log(p_all_clear / p_not_clear), each window's weighted
+by the pair's probability and leaking at the same half-life, says which: the pair's
+action is the gesture that sum favours by `pair_margin` nats, or none while it does not.
 The probabilities should be calibrated
 (the checkpoint's temperature, gesture/calibration.py) for the log-odds to mean what
 they say. The score empties after a pause of `reset_after_s` or on `reset()`.
@@ -32,6 +40,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from proxima.control.evidence import THUMB_GESTURES
 from proxima.control.smoothing import FilteredAction, MovingAverageFilter
 
 if TYPE_CHECKING:
@@ -66,6 +75,7 @@ class EvidenceAccumulator:
         thresholds: Mapping[str, float] | None = None,
         prior: Mapping[str, float] | None = None,
         bridged_weight: float = 1.0,
+        pair_margin: float | None = None,
     ) -> None:
         if threshold <= 0 or half_life_s <= 0 or clip <= 0:
             raise ValueError(
@@ -74,8 +84,17 @@ class EvidenceAccumulator:
             )
         if not 0.0 <= bridged_weight <= 1.0:
             raise ValueError(f"evidence rule: bridged weight must be 0..1, got {bridged_weight}")
+        if pair_margin is not None and pair_margin < 0:
+            raise ValueError(f"evidence rule: pair margin must be >= 0, got {pair_margin}")
         self.bridged_weight = bridged_weight
         self.labels = tuple(labels)
+        # (index of all_clear, index of not_clear) when the pair is decided in two steps
+        self._pair = (
+            tuple(self.labels.index(g) for g in THUMB_GESTURES)
+            if pair_margin is not None and all(g in self.labels for g in THUMB_GESTURES)
+            else None
+        )
+        self.pair_margin = pair_margin
         self.threshold = threshold
         self.thresholds = dict(thresholds or {})
         self.half_life_s = half_life_s
@@ -100,11 +119,13 @@ class EvidenceAccumulator:
             control.evidence_threshold_by_command,
             control.evidence_prior_by_command,
             control.evidence_bridged_weight,
+            control.evidence_pair_margin,
         )
 
     def reset(self) -> None:
         """Forget all evidence."""
         self.score = np.zeros(len(self.labels))
+        self.pair_ratio = 0.0  # signed evidence for all_clear over not_clear (`pair_margin`)
         self._last_t: float | None = None
 
     def update(self, t: float, probs: np.ndarray, bridged: bool = False) -> FilteredAction:
@@ -133,11 +154,28 @@ class EvidenceAccumulator:
         self._last_t = t
         q = np.clip(weighed, P_FLOOR, 1.0 - P_FLOOR)
         llr = np.clip(np.log(q) - np.log1p(-q), -self.clip, self.clip)
+        if self._pair is not None:
+            a, b = self._pair
+            both = min(q[a] + q[b], 1.0 - P_FLOOR)
+            llr[[a, b]] = np.clip(np.log(both) - np.log1p(-both), -self.clip, self.clip)
+            ratio = np.clip(np.log(q[a]) - np.log(q[b]), -self.clip, self.clip)
+            self.pair_ratio = decay * self.pair_ratio + weight * both * float(ratio)
         self.score = np.maximum(decay * self.score + weight * llr, 0.0)
         share = self.score / self._need
         best = int(np.argmax(share))
         action = self.labels[best] if share[best] >= 1.0 else ""
+        if self._pair is not None and best in self._pair and action:
+            action = self._pair_action()
         return FilteredAction(t=t, action=action, confidence=float(min(share[best], 1.0)), probs=p)
+
+    def _pair_action(self) -> str:
+        """The thumb gesture the pair's signed evidence favours by the margin, else none."""
+        margin = self.pair_margin or 0.0
+        if self.pair_ratio >= margin:
+            return THUMB_GESTURES[0]
+        if self.pair_ratio <= -margin:
+            return THUMB_GESTURES[1]
+        return ""
 
     def withhold(self, labels: Sequence[str]) -> None:
         """The newest window cannot tell `labels` apart (the hand evidence): their evidence
@@ -145,6 +183,8 @@ class EvidenceAccumulator:
         windows that see the hand in a row."""
         for label in labels:
             self.score[self.labels.index(label)] = 0.0
+        if self._pair is not None and any(g in labels for g in THUMB_GESTURES):
+            self.pair_ratio = 0.0
 
 
 def decide_window(

@@ -37,12 +37,30 @@ DecisionRule = Literal["average", "evidence"]
 # The evidence rule's per-command thresholds (nats; the rest need `evidence_threshold`):
 # arming alone moves no drone, and the side views name have_command at 0.6-0.9; 12 with
 # the shipped ensemble gives 6 points more of the commands asked for under `field` than
-# 17.5 for 2 more wrong acting commands in 10 h (docs/experiments.md, "Twenty-ninth session")
-EVIDENCE_BY_COMMAND = {"have_command": 12.0}
+# 17.5 for 2 more wrong acting commands in 10 h (docs/experiments.md, "Twenty-ninth session").
+# The abort (hover, disarm) at 12 too: a missed one leaves the drone on its last command,
+# a false one only hovers it; the left view names it at 0.8-0.9 with dips (+0.5-0.9
+# points clean and under `field`, "Thirty-fifth session")
+EVIDENCE_BY_COMMAND = {"have_command": 12.0, "wave_off": 12.0}
 # Its per-command odds weights: doubt between have_command (while armed a re-arm, which
 # moves no drone) and a motion goes to the former; measured over 30 h of held-out
 # streams per condition (docs/experiments.md, "Twenty-seventh session")
 EVIDENCE_PRIOR_BY_COMMAND = {"have_command": 2.0}
+# all_clear / not_clear decided in two steps (the pair as one gesture, then the thumb by
+# this many nats of their running log-ratio): on 4 h of held-out streams per condition and
+# two model sets, +0.9-3.2 points of the commands asked for clean and +1.7-2.2 under
+# `field`, one more wrong command in 16 h (all_clear read as not_clear: a hold for a
+# resume) (docs/experiments.md, "Thirty-fifth session")
+EVIDENCE_PAIR_MARGIN = 12.0
+# Agreeing decisions per command (the rest: `confirm`): a wrong landing ends the flight;
+# move_downward three (0.5 s), since an arm coming down (all_clear's, move_to_right's) reads as
+# it for a moment: 3-4 of 9-10 wrong acting commands under `field` in 4 h of held-out streams
+# gone, on two model sets, for under 0.1 point of commands ("Thirty-fifth session")
+CONFIRM_BY_COMMAND = {"land": 9, "move_downward": 3}
+# all_clear / not_clear raise the arm to shoulder height: a window whose thumb-hand wrist
+# stays below half the way from hip to shoulder is rest, which the classifier (no rest
+# class) reads as the pair (docs/experiments.md, "Thirty-fifth session")
+THUMB_RAISE = 0.5
 # The operator's hand that all_clear / not_clear need in view; "off": no check.
 ThumbHand = Literal["right", "left", "off"]
 
@@ -108,11 +126,18 @@ class ControlSettings(BaseModel):
         "pause the engine bridged (longer than training windows hold, 0.25 s): at 1, "
         "bridging gave 3 times the wrong commands under `field`",
     )
+    evidence_pair_margin: float | None = Field(
+        EVIDENCE_PAIR_MARGIN,
+        ge=0.0,
+        description="evidence rule: decide all_clear / not_clear in two steps, the pair's "
+        "summed probability as one gesture and then which thumb, by this many nats of "
+        "their running log-ratio (None: two gestures like the rest)",
+    )
     confirm: int = Field(
         1, ge=1, description="consecutive filtered decisions that must agree before a command"
     )
     confirm_by_command: ConfirmByCommand = Field(
-        default_factory=lambda: {"land": 9},
+        default_factory=lambda: dict(CONFIRM_BY_COMMAND),
         description="per-command `confirm`, e.g. {'land': 9}: a command that ends the "
         "flight may ask for a longer agreement than the others",
     )
@@ -135,6 +160,13 @@ class ControlSettings(BaseModel):
     )
     hand_visibility: float = Field(
         0.5, ge=0.0, le=1.0, description="finger visibility that counts as the hand seen"
+    )
+    thumb_raise: float | None = Field(
+        THUMB_RAISE,
+        ge=0.0,
+        description="all_clear and not_clear raise the thumb hand's arm: a window whose "
+        "wrist never rises this share of the way from the hip to the shoulder commands "
+        "neither (None: no check)",
     )
     idle_disarm_s: float = Field(
         60.0, gt=0.0, description="disarm after this long without a command"

@@ -125,16 +125,16 @@ def fuse(
     top = max(e.weight for _, e in parts)
     labels = mine.labels
     thumbs = [labels.index(g) for g in THUMB_GESTURES if g in labels]
-    hand_seen = any(not e.withheld for _, e in parts)
+    judged = any(not e.withheld for _, e in parts)  # a view sees the hand, its arm raised
     total = np.zeros(len(labels))
     for _, e in parts:
         lp = e.log_probs
-        if hand_seen and e.withheld and len(thumbs) == 2:
+        if judged and e.withheld and len(thumbs) == 2:
             lp = lp.copy()
             lp[thumbs] = np.log(np.mean(np.exp(lp[thumbs])))  # no preference between them
         total += (e.weight / top) * lp
     probs = np.exp(total - _logsumexp(total))
-    withheld = () if hand_seen else parts[0][1].withheld  # then every part withholds them
+    withheld = () if judged else parts[0][1].withheld  # then every part withholds them
     return Fused(probs, withheld, {n: round(e.weight, 3) for n, e in parts})
 
 

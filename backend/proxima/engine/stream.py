@@ -282,7 +282,7 @@ class StreamPipeline:
         self.classifications += 1
         self.last_bridged = bridged
         best = int(np.argmax(probs))
-        withheld = self.evidence.withheld(vis[0])
+        withheld = self.evidence.withheld(vis[0], xyz[0], aspect)
         self.publish(
             GestureEvent(
                 t=t,

@@ -192,7 +192,8 @@ class Recognitions:
 
     labels: tuple[str, ...]
     settings: EngineSettings
-    hand: tuple[str, float]  # (thumb_hand, hand_visibility) the withheld were judged with
+    # (thumb_hand, hand_visibility, thumb_raise) the withheld were judged with
+    hand: tuple[str, float, float | None]
     updates: list[StreamUpdate]
     classified: np.ndarray  # (N,) int
     probs: np.ndarray  # (N, len(labels))
@@ -255,7 +256,7 @@ def recognize(
     return Recognitions(
         labels=tuple(classifier.labels),
         settings=settings,
-        hand=(control.thumb_hand, control.hand_visibility),
+        hand=(control.thumb_hand, control.hand_visibility, control.thumb_raise),
         updates=updates,
         classified=np.asarray(classified, dtype=np.int64),
         probs=probs,
@@ -273,7 +274,7 @@ def decide(rec: Recognitions, control: ControlSettings) -> Run:
     Raises:
         ValueError: `control`'s hand evidence is not the one `rec` was recognised with.
     """
-    hand = (control.thumb_hand, control.hand_visibility)
+    hand = (control.thumb_hand, control.hand_visibility, control.thumb_raise)
     if hand != rec.hand:
         raise ValueError(
             f"the recognitions judged the hand with {rec.hand}, these settings with {hand}: "

@@ -1,0 +1,65 @@
+"""Decision settings compared on one held-out ensemble's streams: the shipped defaults
+and each `--variant` (the defaults updated with its fields), on `bench.decision_check`'s
+evaluation streams (captured whole at 15-30 fps with `--whole-stream-capture`),
+recognitions cached per member as `bench.operating_curve` caches them.
+
+    python -m bench.rule_variants --whole-stream-capture --streams 96 \
+        --members runs/sz/w30-body-smooth-z-s0.pt+...+runs/sz/w30-body-smooth-z-s4.pt \
+        --variant 'off={"evidence_pair_margin": null}' \
+        --variant 'wave_off18={"evidence_threshold_by_command": {"wave_off": 18}}' \
+        --cache-dir runs/sz/cache --out bench/results/rule_variants-sz5.json
+
+`--from N` scores only the streams from the N-th on (a later part that chose nothing).
+Per variant and condition: the commands the script asks for that were given, the wrong
+commands split by what they do (re-arms, wrong armings, acting), by pair, the hours, and
+the median and p95 latency (the mean over the one ensemble).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from bench.decision_check import check, variant
+from bench.operating_curve import ensemble_sets
+from bench.robust_training import log, write_doc
+from bench.window_length import add_stream_args
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--members", required=True, help="CKPT+CKPT+...: one ensemble")
+    ap.add_argument("--variant", action="append", default=[], metavar="NAME=JSON",
+                    help="the defaults updated with these settings (repeat)")  # fmt: skip
+    ap.add_argument("--from", dest="start", type=int, default=0, metavar="N",
+                    help="score the evaluation streams from the N-th on")  # fmt: skip
+    ap.add_argument("--out", type=Path, default=Path("bench/results/rule_variants.json"))
+    add_stream_args(ap)
+    ap.set_defaults(tune_streams=0, streams=48)
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    t0 = time.perf_counter()
+    every = ensemble_sets(args.members.split("+"), args)
+    sets = [(None, {c: (s[args.start :], r[args.start :]) for c, (s, r) in every.items()})]
+    variants = {"defaults": {}} | {
+        n: json.loads(u) for n, _, u in (v.partition("=") for v in args.variant)
+    }
+    result: dict[str, Any] = {"members": args.members, "from": args.start}
+    for name, update in variants.items():
+        row = check(sets, variant(update))
+        result[name] = {"update": update, **row}
+        log(f"{name}: " + "; ".join(
+            f"{c} {row[c]['hit_rate_by_script']} by the script, {row[c]['wrong_acting']} "
+            f"acting, {row[c]['re_arms']} re-arms, {row[c]['wrong_arming']} armings"
+            for c in ("clean", "field1")
+        ))  # fmt: skip
+    write_doc(args.out, "rule_variants", "rule_variants", result, t0)
+
+
+if __name__ == "__main__":
+    main()
