@@ -41,7 +41,11 @@ DecisionRule = Literal["average", "evidence"]
 # The abort (hover, disarm) at 12 too: a missed one leaves the drone on its last command,
 # a false one only hovers it; the left view names it at 0.8-0.9 with dips (+0.5-0.9
 # points clean and under `field`, "Thirty-fifth session")
-EVIDENCE_BY_COMMAND = {"have_command": 12.0, "wave_off": 12.0}
+# The thumb pair at 12 too: its command also needs `EVIDENCE_PAIR_MARGIN` of thumb evidence,
+# and the right view reads `all_clear` at 0.5-0.7 beside `move_downward`; +0.3-1.8 points
+# clean, +0.2-0.8 under `field`, no wrong command more on two model sets ("Thirty-fifth
+# session")
+EVIDENCE_BY_COMMAND = {"have_command": 12.0, "wave_off": 12.0, "all_clear": 12.0, "not_clear": 12.0}
 # Its per-command odds weights: doubt between have_command (while armed a re-arm, which
 # moves no drone) and a motion goes to the former; measured over 30 h of held-out
 # streams per condition (docs/experiments.md, "Twenty-seventh session")
