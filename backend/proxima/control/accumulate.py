@@ -178,9 +178,9 @@ class EvidenceAccumulator:
         return ""
 
     def withhold(self, labels: Sequence[str]) -> None:
-        """The newest window cannot tell `labels` apart (the hand evidence): their evidence
-        so far was a guess, so it is dropped, and a thumb gesture needs `threshold` from
-        windows that see the hand in a row."""
+        """The newest window cannot give `labels` (the hand evidence: the hand unseen, or
+        its arm down): their evidence so far was a guess or rest, so it is dropped, and a
+        thumb gesture needs `threshold` from windows that see the hand raised in a row."""
         for label in labels:
             self.score[self.labels.index(label)] = 0.0
         if self._pair is not None and any(g in labels for g in THUMB_GESTURES):
