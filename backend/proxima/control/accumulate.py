@@ -153,13 +153,12 @@ class EvidenceAccumulator:
             weight *= self.bridged_weight
         self._last_t = t
         q = np.clip(weighed, P_FLOOR, 1.0 - P_FLOOR)
-        llr = np.clip(np.log(q) - np.log1p(-q), -self.clip, self.clip)
-        if self._pair is not None:
+        if self._pair is not None:  # the thumb's evidence, then the pair as one gesture
             a, b = self._pair
-            both = min(q[a] + q[b], 1.0 - P_FLOOR)
-            llr[[a, b]] = np.clip(np.log(both) - np.log1p(-both), -self.clip, self.clip)
-            ratio = np.clip(np.log(q[a]) - np.log(q[b]), -self.clip, self.clip)
-            self.pair_ratio = decay * self.pair_ratio + weight * both * float(ratio)
+            ratio = float(np.clip(np.log(q[a]) - np.log(q[b]), -self.clip, self.clip))
+            q[[a, b]] = both = min(q[a] + q[b], 1.0 - P_FLOOR)
+            self.pair_ratio = decay * self.pair_ratio + weight * both * ratio
+        llr = np.clip(np.log(q) - np.log1p(-q), -self.clip, self.clip)
         self.score = np.maximum(decay * self.score + weight * llr, 0.0)
         share = self.score / self._need
         best = int(np.argmax(share))
