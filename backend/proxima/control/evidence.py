@@ -11,8 +11,9 @@ which has no "rest" class, reads an operator standing with the arms hanging as t
 (0.8-0.95 of the probability for the front view's rest stances with the shipped model).
 A window in which the thumb hand's wrist never rises `raise_share` of the way from the hip
 to the shoulder (along the body's own axis, so camera roll does not matter) is not the
-pair: in LASER's front and right views 98-100 % of the pair's 30-frame windows reach half
-the way, a hanging arm stays near 0 (docs/experiments.md, "Thirty-fifth session").
+pair: a hanging arm reaches 0.16 of the way at most, while in LASER's front and right views
+98-100 % of the pair's 30-frame windows reach a quarter, 73-100 % seen from 45 degrees
+above (docs/experiments.md, "Thirty-fifth session").
 """
 
 from __future__ import annotations
