@@ -28,6 +28,7 @@ const short = (name) => (name && name.startsWith("/") ? name.split("/").pop() : 
 const pct = (x) => (x === undefined || x === null ? "—" : `${Math.round(100 * x)}%`);
 
 function setStatus(sel, text, cls = "") {
+  if (!root) return;
   const s = q(sel);
   s.textContent = text;
   s.className = `${sel.split(".").pop()} ${cls}`;
@@ -82,6 +83,7 @@ async function startSession() {
         epochs: Number(q("input.epochs").value),
       },
     });
+    if (!root) return;
     selected = calib.gestures[0];
     sessionStorage.setItem(SESSION_KEY, calib.id);
     setStatus(".calib-status", `Calibrating ${calib.stream} (${calib.drone}): ${calib.gestures.length} gestures.`, "ok");

@@ -22,6 +22,7 @@ const GESTURE_KEY = "proxima.labelling.gesture";
 const q = (sel) => root.querySelector(sel);
 
 function status(text, cls = "") {
+  if (!root) return;
   const s = q(".rec-status");
   s.textContent = text;
   s.className = `rec-status ${cls}`;
@@ -67,6 +68,7 @@ function showReading() {
 
 async function review(id) {
   current = await api(`/samples/${id}`);
+  if (!root) return;
   q(".review-box").hidden = false;
   q(".review-title").textContent =
     `Sample ${current.id}: ${current.n_frames} frames of ${current.stream} for ${current.drone} (${current.status})`;
@@ -78,10 +80,10 @@ async function review(id) {
   try {
     reading = await api(`/samples/${id}/reading`);
   } catch (err) {
-    q(".reading").textContent = `No model reading: ${err.message}`;
+    if (root) q(".reading").textContent = `No model reading: ${err.message}`;
     return;
   }
-  showReading();
+  if (root) showReading();
 }
 
 // The chosen stream's live skeleton, so the operator sees the pose before recording.
@@ -108,6 +110,7 @@ async function decide(statusName) {
       method: "PATCH",
       body: { status: statusName, label: statusName === "kept" ? label : null },
     });
+    if (!root) return;
     status(`Sample ${current.id} ${statusName}${statusName === "kept" ? ` as ${label}` : ""}.`, "ok");
     current.status = statusName;
     q("button.keep").disabled = statusName === "kept"; // kept once is kept
@@ -120,6 +123,7 @@ async function decide(statusName) {
 
 async function refreshList() {
   const rows = await api("/samples?limit=200");
+  if (!root) return;
   const body = q("table.samples tbody");
   if (!rows.length) {
     body.replaceChildren(el("tr", {}, el("td", { colspan: "7", class: "muted empty-list", text: "No samples yet: record one above." })));

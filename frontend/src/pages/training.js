@@ -22,6 +22,8 @@ let charts = {};
 let selected = null; // run id shown in the charts
 let offs = [];
 
+// A request can answer after the page was left (unmount sets root to null), so every
+// continuation after an await checks root before it touches the page.
 const q = (sel) => root.querySelector(sel);
 
 function makeChart(canvas, title, yMax) {
@@ -102,6 +104,7 @@ function resetCharts(title) {
 async function showRun(id) {
   selected = id;
   const run = await api(`/training/runs/${encodeURIComponent(id)}`);
+  if (!root) return;
   resetCharts(`Run ${id}: ${run.status || ""}`);
   for (const r of run.rounds || []) addRound(r);
 }
@@ -119,7 +122,8 @@ function duration(r) {
 
 async function refreshRuns() {
   const runs = await api("/training/runs");
-  if (selected === null && runs.length) showRun(runs[0].id);
+  if (!root) return;
+  if (selected === null && runs.length) showRun(runs[0].id).catch((err) => setStatus(err.message, "error"));
   q("table.runs tbody").replaceChildren(
     ...runs.map((r) => {
       const tr = el(
@@ -166,6 +170,7 @@ async function evaluateMissing(rows) {
 
 async function refreshModels() {
   const res = await api("/models");
+  if (!root) return;
   const missing = [];
   q("table.models tbody").replaceChildren(
     ...res.models.map((m) => {
@@ -193,6 +198,7 @@ async function refreshModels() {
 
 async function refreshHistory() {
   const { history } = await api("/models/history");
+  if (!root) return;
   q("table.history tbody").replaceChildren(
     ...(history.length
       ? history.map((h) =>
@@ -223,7 +229,7 @@ async function rollback() {
   } catch (err) {
     setStatus(err.message, "error");
   }
-  refreshModels();
+  refreshModels().catch((err) => setStatus(err.message, "error"));
 }
 
 // Promotion is a guarded action: the candidate's figures beside the model in use's on
@@ -284,11 +290,12 @@ async function askPromote(name) {
       body.querySelector(".promote-result").className = "promote-result error";
       confirm.disabled = false;
     }
-    refreshModels();
+    refreshModels().catch((err) => setStatus(err.message, "error"));
   });
 }
 
 function setStatus(text, cls = "") {
+  if (!root) return;
   const s = q(".train-status");
   s.textContent = text;
   s.className = `train-status ${cls}`;
@@ -324,10 +331,11 @@ async function startRun(ev) {
   }
   try {
     const res = await api("/training/runs", { method: "POST", body });
+    if (!root) return;
     setStatus(`Run ${res.id} started.`, "ok");
     selected = res.id;
     resetCharts(`Run ${res.id}: starting`);
-    refreshRuns();
+    refreshRuns().catch((err) => setStatus(err.message, "error"));
   } catch (err) {
     setStatus(`${err.status === 403 ? "Forbidden: " : ""}${errorText(err)}`, "error");
   }
@@ -428,7 +436,7 @@ export function mount(container) {
         const detail = msg.detail ? ` (${msg.detail})` : "";
         q(".run-title").textContent = `Run ${msg.run_id}: ${msg.status}${detail}`;
       }
-      refreshRuns();
+      refreshRuns().catch((err) => setStatus(err.message, "error"));
       if (msg.status === "completed") refreshModels();
     }),
     on("model", () => refreshModels().catch((err) => setStatus(err.message, "error"))),

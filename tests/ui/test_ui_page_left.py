@@ -1,0 +1,55 @@
+"""A page left before its requests answer: the Training and Labelling pages load their
+tables with requests that can come back after the operator has moved on to
+another page. The answers must be dropped, not thrown at a page that is gone (the
+`page` fixture fails the test on any JavaScript error)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from ui_helpers import login, start_console
+
+
+@pytest.mark.parametrize("name", ["training", "labelling"])
+def test_answers_after_the_page_was_left_are_dropped(  # type: ignore[no-untyped-def]
+    page, tmp_path: Path, name: str
+) -> None:
+    console = start_console(
+        tmp_path,
+        server={
+            "db_path": str(tmp_path / "c.db"),
+            "models_dir": str(tmp_path / "models"),
+            "viser_enabled": False,
+        },
+        training={"enabled": False},
+    )
+    held: list = []  # type: ignore[type-arg]
+    holding = [True]
+
+    def hold(route) -> None:  # type: ignore[no-untyped-def]
+        if holding[0]:
+            held.append(route)
+        else:
+            route.continue_()
+
+    try:
+        login(page, console.url)
+        page.route("**/api/**", hold)
+        page.click(f"nav a[data-page={name}]")
+        deadline = 50
+        while not held and deadline:
+            page.wait_for_timeout(100)
+            deadline -= 1
+        assert held, f"the {name} page asked the server for nothing"
+        holding[0] = False
+        page.click("nav a[data-page=live]")
+        page.wait_for_selector("nav a[data-page=live].active")
+        # Only now do the held requests reach the server and their answers the page.
+        with page.expect_response(lambda r: "/api/" in r.url):
+            for route in held:
+                route.continue_()
+        page.wait_for_timeout(1000)
+        assert page.is_visible("nav a[data-page=live].active")
+    finally:
+        console.close()
