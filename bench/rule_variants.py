@@ -10,6 +10,8 @@ recognitions cached per member as `bench.operating_curve` caches them.
         --cache-dir runs/sz/cache --out bench/results/rule_variants-sz5.json
 
 `--from N` scores only the streams from the N-th on (a later part that chose nothing).
+`--base JSON` updates the defaults and every variant alike, e.g. '{"thumb_raise": 0.5}' for
+a cache recognised with that arm check.
 Per variant and condition: the commands the script asks for that were given, the wrong
 commands split by what they do (re-arms, wrong armings, acting), by pair, the hours, and
 the median and p95 latency (the mean over the one ensemble).
@@ -25,7 +27,7 @@ from typing import Any
 
 import torch
 
-from bench.decision_check import check, variant
+from bench.decision_check import check, merged, variant
 from bench.operating_curve import ensemble_sets
 from bench.robust_training import log, write_doc
 from bench.window_length import add_stream_args
@@ -36,6 +38,8 @@ def main() -> None:
     ap.add_argument("--members", required=True, help="CKPT+CKPT+...: one ensemble")
     ap.add_argument("--variant", action="append", default=[], metavar="NAME=JSON",
                     help="the defaults updated with these settings (repeat)")  # fmt: skip
+    ap.add_argument("--base", default="{}", metavar="JSON",
+                    help="settings under the defaults and every variant")  # fmt: skip
     ap.add_argument("--from", dest="start", type=int, default=0, metavar="N",
                     help="score the evaluation streams from the N-th on")  # fmt: skip
     ap.add_argument("--out", type=Path, default=Path("bench/results/rule_variants.json"))
@@ -49,9 +53,10 @@ def main() -> None:
     variants = {"defaults": {}} | {
         n: json.loads(u) for n, _, u in (v.partition("=") for v in args.variant)
     }
-    result: dict[str, Any] = {"members": args.members, "from": args.start}
+    base = json.loads(args.base)
+    result: dict[str, Any] = {"members": args.members, "from": args.start, "base": base}
     for name, update in variants.items():
-        row = check(sets, variant(update))
+        row = check(sets, variant(merged(base, update)))
         result[name] = {"update": update, **row}
         log(f"{name}: " + "; ".join(
             f"{c} {row[c]['hit_rate_by_script']} by the script, {row[c]['wrong_acting']} "
