@@ -7,17 +7,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ui_helpers import login, screenshot, start_console
+from ui_helpers import login, own_server, screenshot, start_console
 
 
 def test_forms_refuse_bad_values_with_sentences(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
     console = start_console(
         tmp_path,
-        server={
-            "db_path": str(tmp_path / "c.db"),
-            "models_dir": str(tmp_path / "models"),
-            "viser_enabled": False,
-        },
+        server=own_server(tmp_path),
     )
     posts: list[str] = []
     page.on("request", lambda r: posts.append(r.url) if r.method == "POST" else None)

@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from ui_helpers import login, start_console
+from ui_helpers import login, own_server, start_console
 
 
 @pytest.mark.parametrize("name", ["training", "labelling"])
@@ -17,11 +17,7 @@ def test_answers_after_the_page_was_left_are_dropped(  # type: ignore[no-untyped
 ) -> None:
     console = start_console(
         tmp_path,
-        server={
-            "db_path": str(tmp_path / "c.db"),
-            "models_dir": str(tmp_path / "models"),
-            "viser_enabled": False,
-        },
+        server=own_server(tmp_path),
         training={"enabled": False},
     )
     held: list = []  # type: ignore[type-arg]

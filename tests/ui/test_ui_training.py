@@ -7,17 +7,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ui_helpers import VIEWER, login, screenshot, start_console
+from ui_helpers import VIEWER, login, own_server, screenshot, start_console
 
 
 def test_start_a_run_and_see_curve_points(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
     console = start_console(
         tmp_path,
-        server={
-            "db_path": str(tmp_path / "c.db"),
-            "models_dir": str(tmp_path / "models"),
-            "viser_enabled": False,
-        },
+        server=own_server(tmp_path),
     )
     try:
         assert console.runtime.training is not None, console.runtime.notes

@@ -60,6 +60,16 @@ class Console:
         self.runtime.close()
 
 
+def own_server(tmp: Path) -> dict[str, Any]:
+    """`[server]` for a console with its own database and (empty) models folder under
+    `tmp`, and no 3D view."""
+    return {
+        "db_path": str(tmp / "c.db"),
+        "models_dir": str(tmp / "models"),
+        "viser_enabled": False,
+    }
+
+
 def start_console(
     tmp: Path,
     *,
