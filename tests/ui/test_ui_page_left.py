@@ -42,10 +42,16 @@ def test_answers_after_the_page_was_left_are_dropped(  # type: ignore[no-untyped
         page.click("nav a[data-page=live]")
         page.wait_for_selector("nav a[data-page=live].active")
         # Only now do the held requests reach the server and their answers the page.
-        with page.expect_response(lambda r: "/api/" in r.url):
-            for route in held:
-                route.continue_()
-        page.wait_for_timeout(1000)
+        finished: list = []  # type: ignore[type-arg]
+        page.on("requestfinished", lambda r: finished.append(r))
+        for route in held:
+            route.continue_()
+        deadline = 100
+        while not set(r.request for r in held) <= set(finished) and deadline:
+            page.wait_for_timeout(100)
+            deadline -= 1
+        assert deadline, "the held requests never finished"
+        page.wait_for_timeout(300)  # the pages' code after each answer
         assert page.is_visible("nav a[data-page=live].active")
     finally:
         console.close()
