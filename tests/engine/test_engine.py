@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from engine_helpers import collect
 
 from proxima.control import AVERAGE_RULE, ControlSettings
 from proxima.engine import Engine, JsonlWriter, StreamSpec
@@ -24,16 +25,6 @@ PAPER = [
     ("move_to_right", 5.0),
     ("land", 4.0),
 ]
-
-
-def collect(engine_args: dict, specs: list[StreamSpec]) -> tuple[list[dict], Engine]:
-    """Run the engine; every event but poses as dicts."""
-    bus = EventBus()
-    events: list[dict] = []
-    bus.add_listener(lambda e: events.append(e.to_dict()) if e.type != "pose" else None)
-    engine = Engine(specs, bus, **{"realtime": False, **engine_args})
-    engine.run()
-    return events, engine
 
 
 @pytest.fixture(scope="module")

@@ -4,29 +4,12 @@ classifier commands them), the front view gives the same commands."""
 
 from __future__ import annotations
 
-from pathlib import Path
+from engine_helpers import commands, replay
 
-from proxima.control import ControlSettings
-from proxima.engine import Engine, StreamSpec
 from proxima.evaluation.stitch import stitch_views
-from proxima.events import EventBus
 
 PLAN = [("have_command", 5.0), ("all_clear", 6.0), ("have_command", 4.0), ("not_clear", 6.0)]
 THUMB = {"all_clear", "not_clear"}
-
-
-def run(csv: Path, classifier, **control) -> list[dict]:
-    bus = EventBus()
-    events: list[dict] = []
-    bus.add_listener(lambda e: events.append(e.to_dict()) if e.type != "pose" else None)
-    spec = StreamSpec(name="main", uri=f"replay:{csv}")
-    Engine([spec], bus, control=ControlSettings(**control), classifier=classifier,
-           realtime=False).run()  # fmt: skip
-    return events
-
-
-def commands(events: list[dict]) -> list[str]:
-    return [e["command"] for e in events if e["type"] == "command"]
 
 
 def during_thumb(events: list[dict], stream) -> list[dict]:
@@ -41,7 +24,7 @@ def test_the_left_camera_never_commands_a_thumb_gesture(laser_clips, classifier,
     streams = stitch_views(laser_clips, PLAN, views=("l", "f"), part="train", seed=3)
     for view, s in streams.items():
         s.write(tmp_path / f"{view}.csv")
-    left = run(tmp_path / "l.csv", classifier)
+    left = replay(tmp_path / "l.csv", classifier)
     assert not THUMB & set(commands(left))
     during = during_thumb(left, streams["l"])
     # mostly withheld: now and then a window sees the hand (0.5 s of 30-frame windows in
@@ -49,11 +32,11 @@ def test_the_left_camera_never_commands_a_thumb_gesture(laser_clips, classifier,
     withheld = [set(g["withheld"]) == THUMB for g in during]
     assert during and sum(withheld) >= 0.8 * len(during)
     # the same classifier, unchecked, does command them from this view
-    assert THUMB & set(commands(run(tmp_path / "l.csv", classifier, thumb_hand="off")))
-    front = run(tmp_path / "f.csv", classifier)
+    assert THUMB & set(commands(replay(tmp_path / "l.csv", classifier, thumb_hand="off")))
+    front = replay(tmp_path / "f.csv", classifier)
     assert set(commands(front)) >= THUMB
     # the front view sees the hand: while the arm gives the pair nothing is withheld (a
     # window with the arm hanging, in the other gestures, may be)
     during = during_thumb(front, streams["f"])
     assert during and not any(g["withheld"] for g in during)
-    assert commands(front) == commands(run(tmp_path / "f.csv", classifier, thumb_hand="off"))
+    assert commands(front) == commands(replay(tmp_path / "f.csv", classifier, thumb_hand="off"))

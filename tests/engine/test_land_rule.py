@@ -5,7 +5,7 @@ decisions, control/config.py) must command `land_direction` there and `land` onl
 
 from __future__ import annotations
 
-from test_hand_evidence import commands, run
+from engine_helpers import commands, replay
 
 from proxima.evaluation.stitch import stitch_views
 
@@ -16,7 +16,7 @@ def test_the_pause_in_land_direction_is_no_landing(laser_clips, classifier, tmp_
     streams = stitch_views(laser_clips, PLAN, views=("f", "r"), part="test", seed=0)
     for view, stream in streams.items():
         stream.write(tmp_path / f"{view}.csv")
-        events = run(tmp_path / f"{view}.csv", classifier)
+        events = replay(tmp_path / f"{view}.csv", classifier)
         # the hover: the replay ends and the operator is lost
         assert commands(events) == [*(g for g, _ in PLAN), "hover"], view
         onset = next(seg.onset_t for seg in stream.segments if seg.gesture == "land")

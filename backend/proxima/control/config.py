@@ -207,5 +207,5 @@ class ControlSettings(BaseModel):
 # commands (docs/recognition.md).
 # land on nine agreeing decisions, as the average rule was tuned with
 AVERAGE_RULE = ControlSettings(
-    decision="average", confirm=2, confirm_by_command={"land": 9, "move_downward": 3}
+    decision="average", confirm=2, confirm_by_command={**CONFIRM_BY_COMMAND, "land": 9}
 )

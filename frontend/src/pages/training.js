@@ -123,7 +123,7 @@ function duration(r) {
 async function refreshRuns() {
   const runs = await api("/training/runs");
   if (!root) return;
-  if (selected === null && runs.length) showRun(runs[0].id).catch((err) => setStatus(err.message, "error"));
+  if (selected === null && runs.length) showRun(runs[0].id).catch(showError);
   q("table.runs tbody").replaceChildren(
     ...runs.map((r) => {
       const tr = el(
@@ -192,7 +192,7 @@ async function refreshModels() {
       return tr;
     }),
   );
-  refreshHistory().catch((err) => setStatus(err.message, "error"));
+  refreshHistory().catch(showError);
   evaluateMissing(missing);
 }
 
@@ -227,9 +227,9 @@ async function rollback() {
     const res = await api("/models/rollback", { method: "POST" });
     setStatus(`Rolled back: the live engine runs ${res.promoted} again.`, "ok");
   } catch (err) {
-    setStatus(err.message, "error");
+    showError(err);
   }
-  refreshModels().catch((err) => setStatus(err.message, "error"));
+  refreshModels().catch(showError);
 }
 
 // Promotion is a guarded action: the candidate's figures beside the model in use's on
@@ -290,7 +290,7 @@ async function askPromote(name) {
       body.querySelector(".promote-result").className = "promote-result error";
       confirm.disabled = false;
     }
-    refreshModels().catch((err) => setStatus(err.message, "error"));
+    refreshModels().catch(showError);
   });
 }
 
@@ -300,6 +300,9 @@ function setStatus(text, cls = "") {
   s.textContent = text;
   s.className = `train-status ${cls}`;
 }
+
+// A refresh that failed says so on the page (its promise is not left unhandled).
+const showError = (err) => setStatus(err.message, "error");
 
 // The form is drawn from `training_form` in /api/config: per field, the type, bounds and
 // choices of the backend's FLConfig and the runner's default, so it cannot drift from
@@ -335,7 +338,7 @@ async function startRun(ev) {
     setStatus(`Run ${res.id} started.`, "ok");
     selected = res.id;
     resetCharts(`Run ${res.id}: starting`);
-    refreshRuns().catch((err) => setStatus(err.message, "error"));
+    refreshRuns().catch(showError);
   } catch (err) {
     setStatus(`${err.status === 403 ? "Forbidden: " : ""}${errorText(err)}`, "error");
   }
@@ -436,13 +439,13 @@ export function mount(container) {
         const detail = msg.detail ? ` (${msg.detail})` : "";
         q(".run-title").textContent = `Run ${msg.run_id}: ${msg.status}${detail}`;
       }
-      refreshRuns().catch((err) => setStatus(err.message, "error"));
-      if (msg.status === "completed") refreshModels();
+      refreshRuns().catch(showError);
+      if (msg.status === "completed") refreshModels().catch(showError);
     }),
-    on("model", () => refreshModels().catch((err) => setStatus(err.message, "error"))),
+    on("model", () => refreshModels().catch(showError)),
   );
-  refreshRuns().catch((err) => setStatus(err.message, "error"));
-  refreshModels().catch((err) => setStatus(err.message, "error"));
+  refreshRuns().catch(showError);
+  refreshModels().catch(showError);
 }
 
 export function unmount() {
