@@ -30,9 +30,10 @@ export function setUnauthorizedHandler(fn) {
   onUnauthorized = fn;
 }
 
-export async function api(path, { method = "GET", body } = {}) {
+// `token` overrides the session's: logging out sends the token it has already forgotten.
+export async function api(path, { method = "GET", body, token = session.token } = {}) {
   const headers = {};
-  if (session.token) headers.Authorization = `Bearer ${session.token}`;
+  if (token) headers.Authorization = `Bearer ${token}`;
   if (body !== undefined) headers["Content-Type"] = "application/json";
   const res = await fetch(`./api${path}`, {
     method,

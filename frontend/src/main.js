@@ -114,14 +114,17 @@ $("#password-form").addEventListener("submit", async (ev) => {
   }
 });
 
+// Forget the token before telling the server: a reload while the request is on its way
+// must land on the login form, not restore the session being closed.
 $("#logout").addEventListener("click", async () => {
+  const token = session.token;
+  session.token = null;
+  showLogin();
   try {
-    await api("/auth/logout", { method: "POST" });
+    await api("/auth/logout", { method: "POST", token });
   } catch {
     /* already gone */
   }
-  session.token = null;
-  showLogin();
 });
 
 onStatus((s) => {

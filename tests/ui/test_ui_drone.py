@@ -214,6 +214,7 @@ def test_command_log_rows_reasons_reload_filter_and_csv(page, flying: Console) -
 
     # Log out and in: the same rows, with times and outcomes, emergency stops included.
     page.click("#logout")
+    page.wait_for_selector("#login-form:not([hidden])")
     login(page, flying.url)
     page.wait_for_selector(f"{log} tr.g-refused .reason:has-text('not flying')")
     rows = [r.inner_text() for r in page.query_selector_all(f"{log} tr")]

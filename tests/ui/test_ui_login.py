@@ -58,3 +58,30 @@ def test_throttled_login_counts_down_then_lets_in(page, tmp_path: Path) -> None:
         page.wait_for_selector("#topbar:not([hidden])")
     finally:
         console.close()
+
+
+def test_reload_during_logout_lands_on_the_login_form(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """The page reloads while the logout request is still on its way (CI saw it: a test
+    logged out and navigated at once). The session being closed must not come back."""
+    console = start_console(tmp_path)
+    held: list = []  # type: ignore[type-arg]
+    try:
+        login(page, console.url)
+        page.route("**/api/auth/logout", lambda route: held.append(route))
+        page.click("#logout")
+        deadline = 50
+        while not held and deadline:
+            page.wait_for_timeout(100)
+            deadline -= 1
+        assert held, "the console sent no logout request"
+        # The server has not answered yet: the token is already forgotten.
+        assert page.evaluate("sessionStorage.getItem('proxima.token')") is None
+        page.reload()
+        page.wait_for_selector("#login-form:not([hidden])")
+        page.wait_for_timeout(500)  # a restored session would show the console by now
+        assert page.is_hidden("#topbar")
+        login(page, console.url)
+        assert page.inner_text("#whoami") == f"{ADMIN[0]} (supervisor)"
+    finally:
+        page.unroute_all(behavior="ignoreErrors")
+        console.close()
