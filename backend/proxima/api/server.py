@@ -39,6 +39,9 @@ def _config(app: FastAPI, host: str, port: int, server: ServerSettings | None) -
         port=port,
         log_level="warning",
         lifespan="on",
+        # The sans-I/O implementation: uvicorn's default one sits on websockets' legacy
+        # API, deprecated since websockets 14 and to be removed.
+        ws="websockets-sansio",
         ws_ping_interval=20,
         timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S,
         ssl_certfile=server.tls_certfile if tls and server else None,
