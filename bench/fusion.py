@@ -31,7 +31,8 @@ import numpy as np
 RESULTS = Path(__file__).resolve().parent / "results"
 SETS = (("f",), ("l",), ("r",), ("f", "l"), ("f", "r"), ("l", "r"), ("f", "l", "r"))
 BRIEF = ("expected_commands", "hit_rate", "on_time_rate", "latency_median_s", "latency_p95_s",
-         "wrong", "repeats", "wrong_or_spurious_per_hour", "stream_hours")  # fmt: skip
+         "wrong", "re_arms", "wrong_arming", "wrong_acting", "repeats",
+         "wrong_or_spurious_per_hour", "stream_hours")  # fmt: skip
 Log = Callable[[str], None]
 
 
@@ -92,12 +93,12 @@ def stitched(
     from proxima.evaluation.replay import MemoClassifier
     from proxima.evaluation.stitch import random_plan, stitch_views
     from proxima.gesture.capture import condition
-    from proxima.gesture.classifier import GestureClassifier
     from proxima.gesture.data_source import resolve_dataset
+    from proxima.gesture.ensemble import load_checkpoint
     from proxima.gesture.laser import load_laser_dir
 
     clips = load_laser_dir(resolve_dataset(None))
-    clf = MemoClassifier(GestureClassifier.load(checkpoint))
+    clf = MemoClassifier(load_checkpoint(checkpoint))
     every = {"default": ControlSettings(), "no_rearm": ControlSettings(rearm_on_handover=False)}
     controls = {k: every[k] for k in control_names}
     cells: dict[tuple[str, str, str, str], Tally] = {}
@@ -178,11 +179,11 @@ def sim(
     from proxima.evaluation.scoring import score_commands
     from proxima.evaluation.stitch import random_plan
     from proxima.events import EventBus
-    from proxima.gesture.classifier import GestureClassifier
+    from proxima.gesture.ensemble import load_checkpoint
     from proxima.sim import registry
     from proxima.sim.config import OperatorConfig, SceneConfig, build_scene
 
-    clf = MemoClassifier(GestureClassifier.load(checkpoint))
+    clf = MemoClassifier(load_checkpoint(checkpoint))
     cells: dict[tuple[str, str, str], Tally] = {}
     for depth in depth_noises:
         for seed in seeds:
@@ -267,7 +268,12 @@ def sim_window_accuracy(
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
-    ap.add_argument("--checkpoint", type=Path, required=True, help="a --split temporal model")
+    ap.add_argument(
+        "--checkpoint",
+        type=Path,
+        required=True,
+        help="a --split temporal model: one file, an ensemble file or comma-joined files",
+    )
     ap.add_argument("--only", choices=("stitched", "sim"), default=None)
     ap.add_argument("--seeds", type=int, default=6, help="stitched scripts (seeds 2000...)")
     ap.add_argument("--segments", type=int, default=30)

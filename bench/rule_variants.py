@@ -14,7 +14,9 @@ recognitions cached per member as `bench.operating_curve` caches them.
 a cache recognised with that arm check.
 Per variant and condition: the commands the script asks for that were given, the wrong
 commands split by what they do (re-arms, wrong armings, acting), by pair, the hours, and
-the median and p95 latency (the mean over the one ensemble).
+the median and p95 latency (the mean over the one ensemble). `--per-view` adds the same
+per camera view (`per_view`), with the commands lost behind a missed arming
+(`lost_disarmed`: asked for by the script, not expected after the run's own arming).
 """
 
 from __future__ import annotations
@@ -31,6 +33,36 @@ from bench.decision_check import check, merged, variant
 from bench.operating_curve import ensemble_sets
 from bench.robust_training import log, write_doc
 from bench.window_length import add_stream_args
+from proxima.control import ControlSettings
+from proxima.evaluation.latency import decide
+from proxima.evaluation.scoring import Score
+
+
+def per_view(streams: list[Any], recognitions: list[Any], control: ControlSettings) -> dict:
+    """Each camera view's figures by the script, and what a missed arming cost there."""
+    script: dict[str, Score] = {}
+    own: dict[str, Score] = {}
+    for stream, rec in zip(streams, recognitions, strict=True):
+        run = decide(rec, control)
+        script.setdefault(stream.view, Score()).merge(run.score(stream, by_script=True))
+        own.setdefault(stream.view, Score()).merge(run.score(stream))
+    out: dict[str, Any] = {}
+    for view in sorted(script):
+        s = script[view].summary()
+        out[view] = {
+            "expected_by_script": s["expected_commands"],
+            "hit_rate_by_script": s["hit_rate"],
+            "lost_disarmed": s["expected_commands"] - own[view].expected,
+            "wrong_acting": s["wrong_acting"],
+            "re_arms": s["re_arms"],
+            "wrong_arming": s["wrong_arming"],
+            "latency_p95_s": s["latency_p95_s"],
+            "within_2_5_s": s["within_2_5_s"],
+            "missed_by_gesture": dict(
+                sorted(s["missed_by_gesture"].items(), key=lambda kv: -kv[1])
+            ),
+        }
+    return out
 
 
 def main() -> None:
@@ -42,6 +74,7 @@ def main() -> None:
                     help="settings under the defaults and every variant")  # fmt: skip
     ap.add_argument("--from", dest="start", type=int, default=0, metavar="N",
                     help="score the evaluation streams from the N-th on")  # fmt: skip
+    ap.add_argument("--per-view", action="store_true", help="also the figures per camera view")
     ap.add_argument("--out", type=Path, default=Path("bench/results/rule_variants.json"))
     add_stream_args(ap)
     ap.set_defaults(tune_streams=0, streams=48)
@@ -58,6 +91,10 @@ def main() -> None:
     for name, update in variants.items():
         row = check(sets, variant(merged(base, update)))
         result[name] = {"update": update, **row}
+        if args.per_view:
+            control = variant(merged(base, update))
+            for cond, (streams, recs) in sets[0][1].items():
+                result[name][cond]["per_view"] = per_view(streams, recs, control)
         log(f"{name}: " + "; ".join(
             f"{c} {row[c]['hit_rate_by_script']} by the script, {row[c]['wrong_acting']} "
             f"acting, {row[c]['re_arms']} re-arms, {row[c]['wrong_arming']} armings"

@@ -49,3 +49,25 @@ def test_the_ensemble_from_cached_recognitions_is_the_engines(args) -> None:
 def test_members_of_another_window_are_refused(args) -> None:
     with pytest.raises(ValueError, match="classify different frames"):
         ensemble_sets([MEMBERS[0], str(default_checkpoint())], args)
+
+
+def test_per_view_figures_add_up_to_the_whole(args) -> None:
+    """bench.rule_variants --per-view: the views' commands by the script are the whole
+    run's, and the commands lost behind a missed arming are the gap between the script's
+    count and the run's own."""
+    from bench.rule_variants import per_view
+    from proxima.control import ControlSettings
+    from proxima.evaluation.latency import evaluate_config_by_script
+
+    merged = ensemble_sets(MEMBERS, args)
+    control = ControlSettings()
+    for cond in CONDITIONS:
+        streams, recs = merged[cond]
+        own, script = evaluate_config_by_script(streams, recs, control)
+        views = per_view(streams, recs, control)
+        assert set(views) == {s.view for s in streams}
+        assert sum(v["expected_by_script"] for v in views.values()) == script["expected_commands"]
+        given = sum(v["hit_rate_by_script"] * v["expected_by_script"] for v in views.values())
+        assert round(given) == script["hits"] + script["late_hits"]
+        lost = sum(v["lost_disarmed"] for v in views.values())
+        assert lost == script["expected_commands"] - own["expected_commands"] >= 0
