@@ -38,7 +38,9 @@ from proxima.evaluation.latency import decide
 from proxima.evaluation.scoring import Score
 
 
-def per_view(streams: list[Any], recognitions: list[Any], control: ControlSettings) -> dict:
+def per_view(
+    streams: list[Any], recognitions: list[Any], control: ControlSettings
+) -> dict[str, Any]:
     """Each camera view's figures by the script, and what a missed arming cost there."""
     script: dict[str, Score] = {}
     own: dict[str, Score] = {}
@@ -89,10 +91,10 @@ def main() -> None:
     base = json.loads(args.base)
     result: dict[str, Any] = {"members": args.members, "from": args.start, "base": base}
     for name, update in variants.items():
-        row = check(sets, variant(merged(base, update)))
+        control = variant(merged(base, update))
+        row = check(sets, control)
         result[name] = {"update": update, **row}
         if args.per_view:
-            control = variant(merged(base, update))
             for cond, (streams, recs) in sets[0][1].items():
                 result[name][cond]["per_view"] = per_view(streams, recs, control)
         log(f"{name}: " + "; ".join(
