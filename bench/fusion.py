@@ -71,11 +71,11 @@ class Tally:
         }
 
 
-def engine_settings(fusion: str, overrule_below: float) -> Any:
+def engine_settings(fusion: str, overrule_below: float, arms: bool = True) -> Any:
     from proxima.engine.config import EngineSettings
 
     return EngineSettings.model_validate(
-        {"fusion": fusion, "fusion_overrule_below": overrule_below}
+        {"fusion": fusion, "fusion_overrule_below": overrule_below, "fusion_arms": arms}
     )
 
 
@@ -87,6 +87,7 @@ def stitched(
     overrule_below: float,
     control_names: Sequence[str],
     log: Log,
+    arms: bool = True,
 ) -> dict[str, Any]:
     from proxima.control import ControlSettings
     from proxima.evaluation.fusion import captured, engine_run_views
@@ -121,7 +122,7 @@ def stitched(
                         run = engine_run_views(
                             [views[v] for v in cams],
                             control,
-                            engine_settings(fusion, overrule_below),
+                            engine_settings(fusion, overrule_below, arms),
                             clf,
                         )
                         score = run.score(views[cams[0]])
@@ -144,6 +145,7 @@ def stitched(
         "segments_per_stream": segments,
         "conditions": list(conditions),
         "fusion_overrule_below": overrule_below,
+        "fusion_arms": arms,
         "controls": {k: v.model_dump() for k, v in controls.items()},
         "results": out,
     }
@@ -170,6 +172,7 @@ def sim(
     depth_noises: Sequence[float],
     overrule_below: float,
     log: Log,
+    arms: bool = True,
 ) -> dict[str, Any]:
     from proxima.control import ControlSettings
     from proxima.engine.config import StreamSpec
@@ -212,7 +215,7 @@ def sim(
                     bus.add_listener(run.add)
                     engine = Engine(
                         specs, bus, control=ControlSettings(),
-                        settings=engine_settings(fusion, overrule_below), realtime=False,
+                        settings=engine_settings(fusion, overrule_below, arms), realtime=False,
                         classifier=clf,
                     )  # fmt: skip
                     if engine.fusion is not None:
@@ -241,6 +244,7 @@ def sim(
         "seeds": list(seeds),
         "segments_per_stream": segments,
         "fusion_overrule_below": overrule_below,
+        "fusion_arms": arms,
         "results": out,
     }
 
@@ -291,6 +295,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=None,
         help="EngineSettings.fusion_overrule_below (default: its default)",
     )
+    ap.add_argument(
+        "--no-fusion-arms",
+        dest="fusion_arms",
+        action="store_false",
+        help="EngineSettings.fusion_arms = false: only a stream's own decision arms control",
+    )
     ap.add_argument("--out", type=Path, default=RESULTS / "fusion.json")
     args = ap.parse_args(argv)
 
@@ -317,14 +327,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         seeds = range(2000, 2000 + args.seeds)
         part = stitched(
             args.checkpoint, seeds, args.segments, args.conditions, args.overrule_below,
-            args.controls, log,
+            args.controls, log, args.fusion_arms,
         )  # fmt: skip
         result["stitched"] = {"command": cmd, **part, "seconds": round(time.perf_counter() - t0)}
     if args.only in (None, "sim"):
         t1 = time.perf_counter()
         part = sim(
             args.checkpoint, range(args.sim_seeds), args.sim_segments, args.depth_noise,
-            args.overrule_below, log,
+            args.overrule_below, log, args.fusion_arms,
         )  # fmt: skip
         result["sim"] = {"command": cmd, **part, "seconds": round(time.perf_counter() - t1)}
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -206,3 +206,38 @@ def test_a_view_that_disagrees_does_not_overrule_by_default(
     assert list(kept.weights) == ["f"] and np.array_equal(kept.probs, front.probs)
     mixed = fuse(("f", front), [("l", other)], 1.0)  # without the guard it would count
     assert list(mixed.weights) == ["f", "l"] and mixed.probs.max() < front.probs.max()
+
+
+@pytest.mark.parametrize("arms", [True, False])
+def test_fused_evidence_arms_only_when_allowed(
+    clf: MemoClassifier, clips: Clips, arms: bool
+) -> None:
+    """Two cameras see a real `have_command` while the driving stream's own decision has
+    not named it yet: with `fusion_arms` the fused decision arms control; without, only
+    the stream's own `have_command` does."""
+    from proxima.control import CommandController
+    from proxima.events import ArmingEvent
+
+    decisions = FusedDecisions(
+        CommandController(["f", "l"], "main"),
+        ControlSettings(),
+        EngineSettings(fusion="on", fusion_arms=arms),
+    )
+    front, left = clips[("have_command", "f")], clips[("have_command", "l")]
+    events: list[Event] = []
+    for k in range(30):
+        t, row = 1.0 + 0.17 * k, 200 + 5 * k
+        decisions.process(
+            StreamUpdate("l", t, Sight.FULL, "", 0.0, evidence=evidence(clf, left, row))
+        )
+        update = StreamUpdate(
+            "f", t + 0.01, Sight.FULL, "", 0.0, evidence=evidence(clf, front, row)
+        )
+        events += decisions.process(update)
+    armed = [e for e in events if isinstance(e, ArmingEvent) and e.armed]
+    assert bool(armed) is arms
+    if not arms:  # the stream's own decision still arms
+        own = StreamUpdate(
+            "f", 7.0, Sight.FULL, "have_command", 0.99, evidence=evidence(clf, front, 350)
+        )
+        assert any(isinstance(e, ArmingEvent) and e.armed for e in decisions.process(own))

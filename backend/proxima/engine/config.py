@@ -133,3 +133,8 @@ class EngineSettings(BaseModel):
         description="the other streams may disagree with a stream's window only while its own "
         "top probability is below this (1: always, 0: never); agreeing ones always count",
     )
+    fusion_arms: bool = Field(
+        True,
+        description="fused evidence may arm control; false: while disarmed, `have_command` is "
+        "each stream's own decision (the other cameras speed up commands, not the arming)",
+    )

@@ -23,7 +23,9 @@ vector goes through that stream's own fused decision rule (the stream's own kind
 `decision_filter`, emptied whenever the stream's own one is) and the hand evidence,
 and its action replaces the stream's in the update; the controller then does what it
 always does, so only the driving stream's action counts and every command goes to the
-controlled drone.
+controlled drone. With `fusion_arms` false, while control is disarmed `have_command` is
+the stream's own decision, fused or not: the other cameras speed up the commands, not
+the arming.
 
 The thumb gestures (`all_clear`, `not_clear`): a window that does not see the operator's
 hand cannot tell them apart, so when some contributing window does see the hand, the
@@ -41,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from proxima.control import (
+    ARM_GESTURE,
     CommandController,
     ControlSettings,
     DecisionFilter,
@@ -200,6 +203,9 @@ class FusedDecisions:
         if evidence.restarted:
             filt.reset()
         decision, action = decide_window(filt, t, fused.probs, fused.withheld)
+        arming = ARM_GESTURE in (action, update.action)
+        if arming and not self.settings.fusion_arms and not self.controller.arming.armed:
+            action = update.action or ""  # arming is the stream's own decision
         if self.listener is not None:
             self.listener(stream, t, fused)
         return StreamUpdate(stream, t, update.sight, action, decision.confidence, evidence=evidence)
