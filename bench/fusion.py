@@ -71,12 +71,9 @@ class Tally:
         }
 
 
-def engine_settings(fusion: str, overrule_below: float, arms: bool = True) -> Any:
-    from proxima.engine.config import EngineSettings
-
-    return EngineSettings.model_validate(
-        {"fusion": fusion, "fusion_overrule_below": overrule_below, "fusion_arms": arms}
-    )
+def fusion_figures(settings: Any) -> dict[str, Any]:
+    """The fusion settings a part ran with, for its JSON."""
+    return {k: getattr(settings, k) for k in ("fusion_overrule_below", "fusion_arms")}
 
 
 def stitched(
@@ -84,10 +81,9 @@ def stitched(
     seeds: Sequence[int],
     segments: int,
     conditions: Sequence[str],
-    overrule_below: float,
+    settings: Any,
     control_names: Sequence[str],
     log: Log,
-    arms: bool = True,
 ) -> dict[str, Any]:
     from proxima.control import ControlSettings
     from proxima.evaluation.fusion import captured, engine_run_views
@@ -122,7 +118,7 @@ def stitched(
                         run = engine_run_views(
                             [views[v] for v in cams],
                             control,
-                            engine_settings(fusion, overrule_below, arms),
+                            settings.model_copy(update={"fusion": fusion}),
                             clf,
                         )
                         score = run.score(views[cams[0]])
@@ -144,8 +140,7 @@ def stitched(
         "seeds": list(seeds),
         "segments_per_stream": segments,
         "conditions": list(conditions),
-        "fusion_overrule_below": overrule_below,
-        "fusion_arms": arms,
+        **fusion_figures(settings),
         "controls": {k: v.model_dump() for k, v in controls.items()},
         "results": out,
     }
@@ -170,9 +165,8 @@ def sim(
     seeds: Sequence[int],
     segments: int,
     depth_noises: Sequence[float],
-    overrule_below: float,
+    settings: Any,
     log: Log,
-    arms: bool = True,
 ) -> dict[str, Any]:
     from proxima.control import ControlSettings
     from proxima.engine.config import StreamSpec
@@ -215,7 +209,7 @@ def sim(
                     bus.add_listener(run.add)
                     engine = Engine(
                         specs, bus, control=ControlSettings(),
-                        settings=engine_settings(fusion, overrule_below, arms), realtime=False,
+                        settings=settings.model_copy(update={"fusion": fusion}), realtime=False,
                         classifier=clf,
                     )  # fmt: skip
                     if engine.fusion is not None:
@@ -243,8 +237,7 @@ def sim(
         "cameras": {c: sim_uri("SCENE", b, 0.0) for c, b in SIM_CAMERAS.items()},
         "seeds": list(seeds),
         "segments_per_stream": segments,
-        "fusion_overrule_below": overrule_below,
-        "fusion_arms": arms,
+        **fusion_figures(settings),
         "results": out,
     }
 
@@ -309,8 +302,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     from proxima.engine.config import EngineSettings
 
     torch.set_num_threads(1)
-    if args.overrule_below is None:
-        args.overrule_below = EngineSettings().fusion_overrule_below
+    fusion: dict[str, Any] = {"fusion_arms": args.fusion_arms}
+    if args.overrule_below is not None:
+        fusion["fusion_overrule_below"] = args.overrule_below
+    settings = EngineSettings(**fusion)  # fusion off or on per run (model_copy)
     t0 = time.perf_counter()
 
     def log(msg: str) -> None:
@@ -326,15 +321,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.only in (None, "stitched"):
         seeds = range(2000, 2000 + args.seeds)
         part = stitched(
-            args.checkpoint, seeds, args.segments, args.conditions, args.overrule_below,
-            args.controls, log, args.fusion_arms,
-        )  # fmt: skip
+            args.checkpoint, seeds, args.segments, args.conditions, settings, args.controls, log
+        )
         result["stitched"] = {"command": cmd, **part, "seconds": round(time.perf_counter() - t0)}
     if args.only in (None, "sim"):
         t1 = time.perf_counter()
         part = sim(
             args.checkpoint, range(args.sim_seeds), args.sim_segments, args.depth_noise,
-            args.overrule_below, log, args.fusion_arms,
+            settings, log,
         )  # fmt: skip
         result["sim"] = {"command": cmd, **part, "seconds": round(time.perf_counter() - t1)}
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -34,34 +34,28 @@ from bench.operating_curve import ensemble_sets
 from bench.robust_training import log, write_doc
 from bench.window_length import add_stream_args
 from proxima.control import ControlSettings
-from proxima.evaluation.latency import decide
-from proxima.evaluation.scoring import Score
+from proxima.evaluation.latency import evaluate_config_by_script
+
+PER_VIEW = ("wrong_acting", "re_arms", "wrong_arming", "latency_p95_s", "within_2_5_s")
 
 
 def per_view(
     streams: list[Any], recognitions: list[Any], control: ControlSettings
 ) -> dict[str, Any]:
     """Each camera view's figures by the script, and what a missed arming cost there."""
-    script: dict[str, Score] = {}
-    own: dict[str, Score] = {}
-    for stream, rec in zip(streams, recognitions, strict=True):
-        run = decide(rec, control)
-        script.setdefault(stream.view, Score()).merge(run.score(stream, by_script=True))
-        own.setdefault(stream.view, Score()).merge(run.score(stream))
     out: dict[str, Any] = {}
-    for view in sorted(script):
-        s = script[view].summary()
+    for view in sorted({s.view for s in streams}):
+        mine = [i for i, s in enumerate(streams) if s.view == view]
+        own, script = evaluate_config_by_script(
+            [streams[i] for i in mine], [recognitions[i] for i in mine], control
+        )
         out[view] = {
-            "expected_by_script": s["expected_commands"],
-            "hit_rate_by_script": s["hit_rate"],
-            "lost_disarmed": s["expected_commands"] - own[view].expected,
-            "wrong_acting": s["wrong_acting"],
-            "re_arms": s["re_arms"],
-            "wrong_arming": s["wrong_arming"],
-            "latency_p95_s": s["latency_p95_s"],
-            "within_2_5_s": s["within_2_5_s"],
+            "expected_by_script": script["expected_commands"],
+            "hit_rate_by_script": script["hit_rate"],
+            "lost_disarmed": script["expected_commands"] - own["expected_commands"],
+            **{k: script[k] for k in PER_VIEW},
             "missed_by_gesture": dict(
-                sorted(s["missed_by_gesture"].items(), key=lambda kv: -kv[1])
+                sorted(script["missed_by_gesture"].items(), key=lambda kv: -kv[1])
             ),
         }
     return out

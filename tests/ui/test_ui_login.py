@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ui_helpers import ADMIN, VIEWER, login, screenshot, start_console
+from ui_helpers import ADMIN, VIEWER, login, screenshot, start_console, wait_for
 
 
 def test_login_and_logout(page, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
@@ -69,11 +69,7 @@ def test_reload_during_logout_lands_on_the_login_form(page, tmp_path: Path) -> N
         login(page, console.url)
         page.route("**/api/auth/logout", lambda route: held.append(route))
         page.click("#logout")
-        deadline = 50
-        while not held and deadline:
-            page.wait_for_timeout(100)
-            deadline -= 1
-        assert held, "the console sent no logout request"
+        wait_for(lambda: held, 5, "the logout request", page)
         # The server has not answered yet: the token is already forgotten.
         assert page.evaluate("sessionStorage.getItem('proxima.token')") is None
         page.reload()

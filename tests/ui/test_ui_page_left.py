@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from ui_helpers import login, own_server, start_console
+from ui_helpers import login, own_server, start_console, wait_for
 
 
 @pytest.mark.parametrize("name", ["training", "labelling"])
@@ -33,11 +33,7 @@ def test_answers_after_the_page_was_left_are_dropped(  # type: ignore[no-untyped
         login(page, console.url)
         page.route("**/api/**", hold)
         page.click(f"nav a[data-page={name}]")
-        deadline = 50
-        while not held and deadline:
-            page.wait_for_timeout(100)
-            deadline -= 1
-        assert held, f"the {name} page asked the server for nothing"
+        wait_for(lambda: held, 5, f"the {name} page to ask the server", page)
         holding[0] = False
         page.click("nav a[data-page=live]")
         page.wait_for_selector("nav a[data-page=live].active")
@@ -46,11 +42,8 @@ def test_answers_after_the_page_was_left_are_dropped(  # type: ignore[no-untyped
         page.on("requestfinished", lambda r: finished.append(r))
         for route in held:
             route.continue_()
-        deadline = 100
-        while not set(r.request for r in held) <= set(finished) and deadline:
-            page.wait_for_timeout(100)
-            deadline -= 1
-        assert deadline, "the held requests never finished"
+        requests = {r.request for r in held}
+        wait_for(lambda: requests <= set(finished), 10, "the held requests to finish", page)
         page.wait_for_timeout(300)  # the pages' code after each answer
         assert page.is_visible("nav a[data-page=live].active")
     finally:

@@ -111,12 +111,16 @@ def screenshot(page, name: str) -> Path:  # type: ignore[no-untyped-def]
     return path
 
 
-def wait_for(predicate, timeout: float = 15.0, what: str = "condition"):  # type: ignore[no-untyped-def]
-    """Poll `predicate` until it returns something truthy; fail naming `what`."""
+def wait_for(predicate, timeout: float = 15.0, what: str = "condition", page=None):  # type: ignore[no-untyped-def]
+    """Poll `predicate` until it returns something truthy; fail naming `what`. With
+    `page`, wait through the page so Playwright's callbacks (routes, events) run."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         value = predicate()
         if value:
             return value
-        time.sleep(0.1)
+        if page is None:
+            time.sleep(0.1)
+        else:
+            page.wait_for_timeout(100)
     raise AssertionError(f"timed out waiting for {what}")

@@ -203,8 +203,11 @@ class FusedDecisions:
         if evidence.restarted:
             filt.reset()
         decision, action = decide_window(filt, t, fused.probs, fused.withheld)
-        arming = ARM_GESTURE in (action, update.action)
-        if arming and not self.settings.fusion_arms and not self.controller.arming.armed:
+        if (
+            not self.settings.fusion_arms
+            and not self.controller.arming.armed
+            and ARM_GESTURE in (action, update.action)
+        ):
             action = update.action or ""  # arming is the stream's own decision
         if self.listener is not None:
             self.listener(stream, t, fused)
